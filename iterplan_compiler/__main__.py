@@ -1,0 +1,7 @@
+"""``python -m iterplan_compiler`` is the ``iterc`` command."""
+
+import sys
+
+from iterplan_compiler.cli import main
+
+sys.exit(main())

@@ -1,0 +1,1 @@
+"""fltl stage of the iterplan compiler."""

@@ -1,0 +1,131 @@
+"""FLTL formulas and fluents as an immutable IR.
+
+The front-end produces these after elaboration: ranges, ``exists``/``forall``, indexed fluents
+and ``assert`` references are already expanded, so a formula mentions only concrete fluents
+(:class:`FluentProp`) and concrete action sets (:class:`ActionProp`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from iterplan_compiler.diagnostics import NO_SPAN, Span
+
+
+@dataclass(frozen=True, slots=True)
+class Fluent:
+    """``fluent Name = <Initiating, Terminating> initially b`` (one concrete member)."""
+
+    name: str
+    initiating: frozenset[str]
+    terminating: frozenset[str]
+    initially: bool = False
+    span: Span = field(default=NO_SPAN, compare=False)
+
+
+class Formula:
+    """Base class of FLTL formula nodes (all frozen dataclasses)."""
+
+    __slots__ = ()
+
+
+@dataclass(frozen=True, slots=True)
+class Const(Formula):
+    """``true``/``false`` (MTSA's ``rigid`` expressions also elaborate to this)."""
+
+    value: bool
+
+
+@dataclass(frozen=True, slots=True)
+class FluentProp(Formula):
+    """Truth value of a fluent (by name; the fluent is looked up in the model)."""
+
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
+class ActionProp(Formula):
+    """An action proposition: true at a position whose last action is in ``actions``."""
+
+    actions: frozenset[str]
+
+
+@dataclass(frozen=True, slots=True)
+class Not(Formula):
+    arg: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class And(Formula):
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Or(Formula):
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Implies(Formula):
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Iff(Formula):
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Next(Formula):
+    """``X f``."""
+
+    arg: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Always(Formula):
+    """``[] f``."""
+
+    arg: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Eventually(Formula):
+    """``<> f``."""
+
+    arg: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class Until(Formula):
+    """``f U g`` (strong)."""
+
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class WeakUntil(Formula):
+    """``f W g``."""
+
+    left: Formula
+    right: Formula
+
+
+@dataclass(frozen=True, slots=True)
+class NamedFormula:
+    """An elaborated ``assert`` / ``ltl_property`` / ``constraint`` declaration.
+
+    ``kind`` is ``"assert"``, ``"ltl_property"`` or ``"constraint"``; ``extra_alphabet`` is the
+    ``+ {...}`` extension of the formula's alphabet.
+    """
+
+    name: str
+    kind: str
+    formula: Formula
+    extra_alphabet: frozenset[str] = frozenset()
+    span: Span = field(default=NO_SPAN, compare=False)

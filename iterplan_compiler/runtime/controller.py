@@ -1,0 +1,88 @@
+"""Table-driven controller execution: the base every generated controller module uses.
+
+A generated module builds a :class:`ControllerTable` (states, transitions, alphabets) and a
+:class:`Controller` steps through it.  Lookups are dict-of-dict so a step is one or two dict
+accesses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+
+class RefusedEvent(Exception):
+    """The controller does not allow ``event`` in its current state."""
+
+    def __init__(self, state: int, event: str, enabled: Iterable[str]):
+        self.state = state
+        self.event = event
+        self.enabled = tuple(sorted(enabled))
+        super().__init__(
+            f"controller refuses {event!r} in state {state}; enabled: {', '.join(self.enabled) or '(none)'}"
+        )
+
+
+@dataclass(frozen=True)
+class ControllerTable:
+    """An immutable controller automaton.
+
+    ``delta[state][label] = next_state``; the controller is deterministic.  ``controllable``
+    and ``uncontrollable`` partition the alphabet.
+    """
+
+    name: str
+    num_states: int
+    initial: int
+    delta: Mapping[int, Mapping[str, int]]
+    controllable: frozenset[str]
+    uncontrollable: frozenset[str]
+
+    @classmethod
+    def from_transitions(
+        cls,
+        name: str,
+        num_states: int,
+        transitions: Iterable[tuple[int, str, int]],
+        controllable: Iterable[str],
+        uncontrollable: Iterable[str],
+        initial: int = 0,
+    ) -> ControllerTable:
+        delta: dict[int, dict[str, int]] = {s: {} for s in range(num_states)}
+        for s, a, t in transitions:
+            if a in delta[s] and delta[s][a] != t:
+                raise ValueError(f"nondeterministic controller: state {s} label {a!r}")
+            delta[s][a] = t
+        return cls(name, num_states, initial, delta, frozenset(controllable),
+                   frozenset(uncontrollable))
+
+
+class Controller:
+    """A running instance of a :class:`ControllerTable`."""
+
+    __slots__ = ("table", "state", "_delta")
+
+    def __init__(self, table: ControllerTable):
+        self.table = table
+        self.state = table.initial
+        self._delta = table.delta
+
+    def enabled(self) -> frozenset[str]:
+        """Labels allowed in the current state."""
+        return frozenset(self._delta[self.state])
+
+    def enabled_controllable(self) -> list[str]:
+        """Controllable labels allowed now, in sorted order (deterministic choice)."""
+        c = self.table.controllable
+        return sorted(a for a in self._delta[self.state] if a in c)
+
+    def step(self, event: str) -> int:
+        """Take ``event``; return the new state or raise :class:`RefusedEvent`."""
+        try:
+            self.state = self._delta[self.state][event]
+        except KeyError:
+            raise RefusedEvent(self.state, event, self._delta[self.state]) from None
+        return self.state
+
+    def reset(self) -> None:
+        self.state = self.table.initial

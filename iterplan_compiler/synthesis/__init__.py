@@ -1,0 +1,1 @@
+"""synthesis stage of the iterplan compiler."""

@@ -1,0 +1,1 @@
+"""Reusable FSP model fragments (iterator, sensors, capabilities) for `include`."""

@@ -1,0 +1,32 @@
+"""Package-level smoke tests: the CLI answers, the runtime stays light."""
+
+import subprocess
+import sys
+
+from iterplan_compiler import __version__
+from iterplan_compiler.cli import main
+
+
+def test_version(capsys):
+    try:
+        main(["--version"])
+    except SystemExit as exc:
+        assert exc.code == 0
+    assert __version__ in capsys.readouterr().out
+
+
+def test_no_command_prints_help(capsys):
+    assert main([]) == 2
+    assert "usage: iterc" in capsys.readouterr().out
+
+
+def test_runtime_imports_without_lark_or_dd():
+    code = (
+        "import sys, importlib, pkgutil\n"
+        "import iterplan_compiler.runtime as r\n"
+        "for m in pkgutil.iter_modules(r.__path__):\n"
+        "    importlib.import_module('iterplan_compiler.runtime.' + m.name)\n"
+        "bad = [m for m in ('lark', 'dd') if m in sys.modules]\n"
+        "assert not bad, bad\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
