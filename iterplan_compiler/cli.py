@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import sys
 import traceback
 from collections.abc import Sequence
@@ -49,6 +50,11 @@ def _load(name: str):
     return importlib.import_module(f"iterplan_compiler.commands.{name}")
 
 
+def _available(name: str) -> bool:
+    """True if the command's module ships in this build (checked without importing it)."""
+    return importlib.util.find_spec(f"iterplan_compiler.commands.{name}") is not None
+
+
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """Build the argument parser; with ``only``, import just that command's module."""
     parser = argparse.ArgumentParser(
@@ -70,6 +76,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = next((a for a in args_list if not a.startswith("-")), None)
     if command not in COMMANDS:
         command = None
+    elif not _available(command):
+        print(f"iterc: the '{command}' command is not part of this build", file=sys.stderr)
+        return EXIT_USAGE
     parser = build_parser(only=command)
     args = parser.parse_args(args_list)
     if args.command is None:
