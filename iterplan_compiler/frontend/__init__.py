@@ -1,1 +1,50 @@
-"""frontend stage of the iterplan compiler."""
+"""Front-end of the iterplan compiler: FSP text → immutable :class:`~iterplan_compiler.ir.model.Model`.
+
+Entry point: :func:`load`.  Stages: :mod:`.parse` (Lark LALR grammar → :mod:`.syntax` AST,
+all syntax errors reported), :mod:`.includes` (``include "file.lts"``), :mod:`.elaborate`
+(tables, fluents, formulas, specs; lazy LTS building via :mod:`.processes` and the composer
+of :mod:`iterplan_compiler.ir.compose`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors
+
+__all__ = ["load", "parse_file"]
+
+
+def parse_file(path: str, text: str | None = None):
+    """Parse (with includes expanded) → ``(SpecFile, diagnostics, sources)``."""
+    from iterplan_compiler.frontend.includes import expand_includes
+    from iterplan_compiler.frontend.parse import parse_text
+
+    diags: list[Diagnostic] = []
+    if text is None:
+        try:
+            text = Path(path).read_text(encoding="utf-8", errors="replace")
+        except OSError as e:
+            return None, [error("E0800", f"cannot read {path}: {e.strerror or e}",
+                                Span(path, 0, 0))], {}
+    sources = {path: text}
+    spec, ds = parse_text(text, path)
+    diags.extend(ds)
+    spec = expand_includes(spec, sources, diags)
+    return spec, diags, sources
+
+
+def load(path: str, text: str | None = None):
+    """Parse and elaborate a spec file.
+
+    Returns ``(model, diagnostics)``; ``model`` is ``None`` when the file could not be read or
+    has syntax errors (elaboration errors still give a model, so callers can inspect what is
+    well-formed, but ``has_errors(diagnostics)`` is then true).
+    """
+    from iterplan_compiler.frontend.elaborate import elaborate
+
+    spec, diags, sources = parse_file(path, text)
+    if spec is None or has_errors(diags):
+        return None, diags
+    model, ds = elaborate(spec, sources[path], sources)
+    return model, diags + ds

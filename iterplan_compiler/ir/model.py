@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import NO_SPAN, Span
-from iterplan_compiler.ir.formulas import Fluent, Formula
+from iterplan_compiler.ir.formulas import Fluent, Formula, NamedFormula
 from iterplan_compiler.ir.lts import LTS
 
 
@@ -66,3 +66,76 @@ class SynthesisProblem:
     nonblocking: bool = False
     spec_name: str = ""
     span: Span = field(default=NO_SPAN, compare=False)
+
+
+class ModelBackend:
+    """What :class:`Model` delegates its lazy operations to (implemented by the front-end's
+    elaborator, ``frontend/elaborate.py``).  Kept abstract here so ``ir`` does not import the
+    front-end."""
+
+    def build_lts(self, name: str) -> tuple[LTS | None, list]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def synthesis_problem(self, name: str) -> tuple[SynthesisProblem | None, list]:  # pragma: no cover
+        raise NotImplementedError
+
+    def controllable(self, name: str) -> frozenset[str]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """An elaborated FSP file (the front-end's output).
+
+    * ``processes`` / ``composites`` — names of sequential processes and composites in source
+      order; ``composite_keywords[name]`` — operator keywords written before a composite;
+    * ``fluents`` — every concrete fluent (indexed families expanded as ``F.v``);
+    * ``formulas`` — ``assert``/``ltl_property``/``constraint`` declarations (non-parameterised
+      ones, and parameterised ones at their default values);
+    * ``controller_specs`` — elaborated ``controllerSpec`` declarations;
+    * ``constants``, ``ranges``, ``sets`` — evaluated global tables.
+
+    LTSs are built lazily (and cached) by :meth:`build_lts`; every method returns diagnostics
+    instead of raising for bad input.
+    """
+
+    source_path: str
+    source_text: str
+    processes: tuple[str, ...]
+    composites: tuple[str, ...]
+    composite_keywords: dict[str, frozenset[str]]
+    fluents: dict[str, Fluent]
+    formulas: dict[str, NamedFormula]
+    controller_specs: dict[str, ControllerSpec]
+    constants: dict[str, object]
+    ranges: dict[str, tuple[int, int]]
+    sets: dict[str, tuple[str, ...]]
+    backend: ModelBackend = field(repr=False)
+    sources: dict[str, str] = field(default_factory=dict, repr=False)
+
+    def names(self) -> tuple[str, ...]:
+        """Names accepted by :meth:`build_lts`: processes, composites, ltl_property/constraint."""
+        extra = tuple(n for n, f in self.formulas.items() if f.kind != "assert")
+        return self.processes + self.composites + extra
+
+    def default_name(self) -> str | None:
+        """What ``iterc lts SPEC`` builds without a name: the last composite, else the last
+        process (MTSA's "DEFAULT" composes all processes; we keep it simple)."""
+        if self.composites:
+            return self.composites[-1]
+        if self.processes:
+            return self.processes[-1]
+        return None
+
+    def build_lts(self, name: str) -> tuple[LTS | None, list]:
+        """Build (compose, apply operators, synthesise when asked) the named machine."""
+        return self.backend.build_lts(name)
+
+    def synthesis_problem(self, composite_name: str) -> tuple[SynthesisProblem | None, list]:
+        """The resolved synthesis problem of ``controller ||C = (E)~{G}`` (and the other
+        synthesis keywords)."""
+        return self.backend.synthesis_problem(composite_name)
+
+    def controllable(self, composite_name: str) -> frozenset[str]:
+        """Controllable actions of the spec attached to a composite (empty if none)."""
+        return self.backend.controllable(composite_name)

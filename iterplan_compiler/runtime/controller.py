@@ -86,3 +86,51 @@ class Controller:
 
     def reset(self) -> None:
         self.state = self.table.initial
+
+
+def run_bindings(controller: Controller, bindings, *, max_steps: int | None = None,
+                 choose=None, events=None) -> dict:
+    """Simple synchronous run loop for generated modules' ``run(bindings)``.
+
+    ``bindings`` maps each controllable label to a callable taking no arguments that performs
+    the action and returns the uncontrollable answer label(s) (a string, an iterable of strings,
+    or None).  Answers are fed to :meth:`Controller.step` in order.  When no controllable action
+    is enabled and no answer is pending, ``events()`` (if given) supplies the next uncontrollable
+    label (None stops the run).  ``choose(enabled)`` picks among enabled controllable labels
+    (default: the first in sorted order).
+
+    Returns ``{"steps": n, "trace": [labels], "stopped": reason}``; a refused answer raises
+    :class:`RefusedEvent`.  (The full mission executor with iterator, planner and vehicle is
+    :class:`iterplan_compiler.runtime.executor.Executor`.)
+    """
+    from collections import deque
+
+    pending: deque[str] = deque()
+    trace: list[str] = []
+    steps = 0
+    stopped = "max_steps"
+    while max_steps is None or steps < max_steps:
+        if pending:
+            label = pending.popleft()
+        else:
+            enabled = controller.enabled_controllable()
+            if enabled:
+                label = choose(enabled) if choose else enabled[0]
+                controller.step(label)
+                trace.append(label)
+                steps += 1
+                fn = bindings.get(label)
+                out = fn() if fn is not None else None
+                if isinstance(out, str):
+                    pending.append(out)
+                elif out is not None:
+                    pending.extend(out)
+                continue
+            label = events() if events is not None else None
+            if label is None:
+                stopped = "no_event" if controller.enabled() else "deadlock"
+                break
+        controller.step(label)
+        trace.append(label)
+        steps += 1
+    return {"steps": steps, "trace": trace, "stopped": stopped}

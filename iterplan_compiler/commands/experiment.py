@@ -1,0 +1,133 @@
+"""``iterc experiment``: reproduce the paper's Fig. 3 (b)-(d) and the synthesis-time table.
+
+    iterc experiment fig3b --quick            # small sizes (CI), 2 seeds
+    iterc experiment fig3b --jobs 4           # full sizes (up to 700,000 locations, 30 seeds)
+    iterc experiment all --quick --out results/
+    iterc experiment synthesis-table --max-n 6
+
+Writes ``<out>/<exp>.csv`` (one row per simulated mission), ``<out>/<exp>_summary.csv``
+(mean ± 3 SEM per point) and ``<out>/<exp>.png``; prints the summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+HELP = "reproduce the paper's Fig. 3 experiments"
+CHOICES = ("fig3b", "fig3c", "fig3d", "synthesis-table", "all")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("name", choices=CHOICES, help="which experiment")
+    parser.add_argument("--quick", action="store_true",
+                        help="small sizes (seconds; what CI runs)")
+    parser.add_argument("--seeds", type=int, default=None,
+                        help="runs per point (default: the paper's: 30 for fig3b, 6 for Cover)")
+    parser.add_argument("--sorters", default=None,
+                        help="comma-separated subset of distance,last,random")
+    parser.add_argument("--jobs", "-j", type=int, default=1,
+                        help="parallel processes (default 1; 0 = one per CPU)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDR",
+                        help="run on a Dask cluster at ADDR (needs dask.distributed)")
+    parser.add_argument("--out", "-o", default="iterplan-experiments",
+                        help="output directory (default ./iterplan-experiments)")
+    parser.add_argument("--max-n", type=int, default=None,
+                        help="synthesis-table: largest N (default 8, quick 4)")
+    parser.add_argument("--budget", type=float, default=None,
+                        help="synthesis-table: seconds per synthesis (default 60, quick 10)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    from iterplan_compiler.experiments import harness, sweeps
+
+    out = Path(args.out)
+    names = ["fig3b", "fig3c", "fig3d", "synthesis-table"] if args.name == "all" else [args.name]
+    sorters = None
+    if args.sorters:
+        sorters = tuple(s.strip() for s in args.sorters.split(",") if s.strip())
+        bad = [s for s in sorters if s not in sweeps.SORTERS]
+        if bad:
+            print(f"iterc experiment: unknown sorter(s) {', '.join(bad)}; choose from "
+                  f"{', '.join(sweeps.SORTERS)}", file=sys.stderr)
+            return 2
+    if args.seeds is not None and args.seeds < 1:
+        print("iterc experiment: --seeds must be at least 1", file=sys.stderr)
+        return 2
+    jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
+    out.mkdir(parents=True, exist_ok=True)
+    status = 0
+    for name in names:
+        if name == "synthesis-table":
+            status = max(status, _synthesis_table(args, out))
+            continue
+        status = max(status, _figure(name, args, out, jobs, sorters, harness, sweeps))
+    return status
+
+
+def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
+    from iterplan_compiler.experiments import missions, plots
+
+    cases = sweeps.sweep(name, quick=args.quick, seeds=args.seeds, sorters=sorters)
+    problem = missions.preflight(name, out / "controllers")
+    if problem:
+        print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
+        return 1
+    runner = missions.Runner(str(out / "controllers"))
+    prog = harness.Progress(len(cases), name, enabled=not args.no_progress)
+    try:
+        rows = harness.run_cases(cases, runner, jobs=jobs, scheduler=args.scheduler,
+                                 progress=prog)
+    except harness.ExperimentError as exc:
+        print(f"iterc experiment: {exc}", file=sys.stderr)
+        return 2
+    harness.write_csv(rows, out / f"{name}.csv")
+    points = harness.aggregate(rows)
+    harness.write_summary_csv(points, out / f"{name}_summary.csv")
+    png = plots.plot(name, points, out / f"{name}.png")
+    print(_summary_text(name, points))
+    print(f"wrote {out / (name + '.csv')}, {out / (name + '_summary.csv')}, {png}")
+    failed = [r for r in rows if r.get("error")]
+    if failed:
+        print(f"{len(failed)} of {len(rows)} runs failed; first: {failed[0]['error']}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _summary_text(name: str, points) -> str:
+    unit = "overhead %" if name == "fig3c" else "duration s"
+    lines = [f"{name}: mean ± 3 SEM ({unit}), ideal s, overhead %",
+             f"{'universe':>9} {'count':>5} {'sorter':<8} {'n':>3} {'value':>18} "
+             f"{'ideal':>9} {'overhead':>9}"]
+    for p in points:
+        if name == "fig3c":
+            val = f"{p.overhead_pct:8.1f} ± {p.overhead_err3:6.1f}"
+        else:
+            val = f"{p.duration:8.1f} ± {p.duration_err3:6.1f}"
+        lines.append(f"{p.universe:>9} {p.count:>5} {p.sorter:<8} {p.n:>3} {val:>18} "
+                     f"{p.ideal:9.1f} {p.overhead_pct:8.1f}%")
+    return "\n".join(lines)
+
+
+def _synthesis_table(args, out: Path) -> int:
+    from iterplan_compiler.experiments import harness
+    from iterplan_compiler.experiments.synthesis_table import format_table, rows_csv, table
+
+    max_n = args.max_n or (4 if args.quick else 8)
+    budget = args.budget or (10.0 if args.quick else 60.0)
+    ns = list(range(1, max_n + 1))
+    prog = harness.Progress(4 + len(ns) + sum(n >= 2 for n in ns), "synthesis-table", enabled=not args.no_progress)
+    rows = table(ns, budget_s=budget, progress=prog)
+    (out / "synthesis_table.csv").write_text(rows_csv(rows))
+    print(format_table(rows))
+    print(f"wrote {out / 'synthesis_table.csv'}")
+    errors = [r for r in rows if r.status == "error"]
+    if errors:
+        print(f"iterc experiment synthesis-table: {len(errors)} spec(s) failed; first: "
+              f"{errors[0].spec}: {errors[0].detail}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,106 @@
+"""``iterc solve SPEC.slugsin`` — GR(1) realizability and strategy for the slugs input format.
+
+Exit codes: 0 realizable, 1 unrealizable or input errors, 2 usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+HELP = "GR(1) realizability/strategy for a slugsin file"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("spec", help="specification file (slugsin, or structuredslugs)")
+    parser.add_argument("--format", choices=("slugsin", "structuredslugs", "auto"),
+                        default="auto",
+                        help="input format (default: by extension, .structuredslugs or slugsin)")
+    parser.add_argument("--realizability-only", action="store_true",
+                        help="decide realizability only: keep no iterates, build no strategy")
+    parser.add_argument("--order", choices=("interleaved", "blocked"), default="interleaved",
+                        help="initial BDD variable order (default: x next to x')")
+    parser.add_argument("--group-pairs", action="store_true",
+                        help="reorder each variable together with its primed copy")
+    parser.add_argument("--no-reorder", action="store_true",
+                        help="switch CUDD dynamic reordering off")
+    parser.add_argument("--max-growth", type=float, default=None,
+                        help="CUDD sifting max growth (default: dd's 1.2)")
+    parser.add_argument("--monolithic", action="store_true",
+                        help="one transition BDD per player instead of clustered parts")
+    parser.add_argument("--cluster-nodes", type=int, default=5000,
+                        help="node bound for clustering transition conjuncts (default 5000)")
+    parser.add_argument("--no-recycle", action="store_true", help="disable fixpoint recycling")
+    parser.add_argument("--no-feedback", action="store_true",
+                        help="classic Z passes (no per-goal Z update / early fixpoint)")
+    parser.add_argument("--no-early-unrealizable", action="store_true",
+                        help="do not stop as soon as the initial states are lost")
+    parser.add_argument("--engine", choices=("native", "shared"), default="native",
+                        help="fixpoint implementation (shared = synthesis.fixpoint)")
+    parser.add_argument("--json", action="store_true", help="print statistics as JSON")
+
+
+def run(args: argparse.Namespace) -> int:
+    from iterplan_compiler.diagnostics import render
+    from iterplan_compiler.gr1 import slugsin
+    from iterplan_compiler.gr1.game import GameOptions
+    from iterplan_compiler.gr1.solve import SolverOptions, solve
+
+    fmt = args.format
+    if fmt == "auto":
+        fmt = "structuredslugs" if args.spec.endswith(".structuredslugs") else "slugsin"
+    if fmt == "structuredslugs":
+        from iterplan_compiler.gr1 import structured
+
+        spec, diags, text = structured.load(args.spec)
+    else:
+        spec, diags, text = slugsin.load(args.spec)
+    sources = {args.spec: text} if text is not None else {}
+    if diags:
+        print(render(diags, sources), file=sys.stderr)
+    if spec is None:
+        return 1
+    gopt = GameOptions(
+        order=args.order,
+        group_pairs=args.group_pairs,
+        reordering=not args.no_reorder,
+        max_growth=args.max_growth,
+        partition=not args.monolithic,
+        cluster_nodes=args.cluster_nodes,
+    )
+    sopt = SolverOptions(
+        feedback=not args.no_feedback,
+        early_unrealizable=not args.no_early_unrealizable,
+        recycle=not args.no_recycle,
+        engine=args.engine,
+    )
+    res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,
+                       solver_options=sopt)
+    if diags:
+        print(render(diags, sources), file=sys.stderr)
+    if res is None:
+        return 1
+    st = res.stats
+    if args.json:
+        out = {"realizable": res.realizable, **st}
+        print(json.dumps(out, sort_keys=True, default=str))
+    else:
+        print("REALIZABLE" if res.realizable else "UNREALIZABLE")
+        print(f"variables        {len(spec.inputs)} inputs, {len(spec.outputs)} outputs")
+        print(f"build            {st['build_s']:.3f} s  (ρe {st['env_trans_nodes']} nodes in "
+              f"{st['env_clusters']} parts, ρs {st['sys_trans_nodes']} nodes in "
+              f"{st['sys_clusters']} parts)")
+        it = st["iterations"]
+        print(f"winning set      {st['winning_s']:.3f} s  ({st['winning_nodes']} nodes; "
+              f"{it.get('z', 0)} Z / {it.get('y', 0)} Y / {it.get('x', 0)} X iterations"
+              f"{'; stopped early' if st['early_stop'] else ''})")
+        if res.strategy is not None:
+            print(f"strategy         {st['strategy_s']:.3f} s  ({st['strategy_nodes']} nodes, "
+                  f"{res.strategy.goals} goals)")
+        print(f"total            {st['total_s']:.3f} s")
+        if st.get("peak_live_nodes") is not None:
+            print(f"BDD              peak {st['peak_live_nodes']} live nodes, "
+                  f"{st['reorderings']} reorderings, {st['reordering_s']:.3f} s reordering")
+        print(f"peak memory      {st['peak_rss_mb']:.1f} MB")
+    return 0 if res.realizable else 1

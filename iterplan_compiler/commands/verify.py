@@ -1,0 +1,102 @@
+"""``iterc verify SPEC --assert NAME [--assert NAME ...] --on COMPOSITE``.
+
+Model-checks FLTL ``assert`` formulas on a process or composite of SPEC (what MTSA's tests do
+with ``assert Check`` on ``||Sys``; mtsa-semantics §2.9) and prints, for each, either
+``No LTL Property violations detected`` or the violation and a counterexample trace (prefix,
+then the cycle repeated forever).  Semantics, including deadlocks: ``docs/fltl.md``.
+
+Exit codes: 0 every assert holds, 1 a violation or input errors, 2 usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import sys
+from pathlib import Path
+
+from iterplan_compiler.diagnostics import Diagnostic, error, has_errors, render
+
+HELP = "model-check an FLTL assert on a composite"
+
+E_NO_SUCH_ASSERT = "E304"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the command's arguments."""
+    parser.add_argument("spec", metavar="SPEC", help="the .lts specification file")
+    parser.add_argument("--assert", dest="asserts", metavar="NAME", action="append",
+                        required=True, help="assert to check (repeatable)")
+    parser.add_argument("--on", dest="target", metavar="COMPOSITE", required=True,
+                        help="process or composite to check the asserts on")
+    parser.add_argument("--max-states", type=int, default=2_000_000, metavar="N",
+                        help="give up when a product grows beyond N states (default 2000000)")
+
+
+def _sources(args: argparse.Namespace, model) -> dict[str, str]:
+    sources: dict[str, str] = {}
+    if model is not None and getattr(model, "source_text", None) is not None:
+        sources[str(model.source_path)] = model.source_text
+    try:
+        text = Path(args.spec).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return sources
+    sources.setdefault(args.spec, text)
+    sources.setdefault(str(Path(args.spec)), text)
+    return sources
+
+
+def _missing(name: str, known) -> Diagnostic:
+    hint = difflib.get_close_matches(name, sorted(known), n=1)
+    extra = f" (did you mean '{hint[0]}'?)" if hint else ""
+    return error(E_NO_SUCH_ASSERT, f"no assert named '{name}'{extra}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check; diagnostics to stderr, verdicts and traces to stdout."""
+    from iterplan_compiler import frontend
+    from iterplan_compiler.fltl.check import check_assert
+
+    if not Path(args.spec).is_file():
+        print(f"iterc verify: no such file: {args.spec}", file=sys.stderr)
+        return 2
+    model, diags = frontend.load(args.spec)
+    diags = list(diags)
+    named = []
+    if model is not None:
+        for name in args.asserts:
+            nf = model.formulas.get(name)
+            if nf is None:
+                diags.append(_missing(name, model.formulas))
+            else:
+                named.append(nf)
+    lts = None
+    if model is not None and not has_errors(diags):
+        lts, more = model.build_lts(args.target)
+        diags.extend(more)
+    if has_errors(diags) or lts is None:
+        if diags:
+            print(render(diags, _sources(args, model)), file=sys.stderr)
+        return 1
+    if diags:
+        print(render(diags, _sources(args, model)), file=sys.stderr)
+
+    failed = False
+    for nf in named:
+        result, cdiags = check_assert(lts, nf, model.fluents, max_states=args.max_states)
+        if cdiags:
+            print(render(cdiags, _sources(args, model)), file=sys.stderr)
+        if result is None:
+            failed = True
+            continue
+        if result.holds:
+            print(f"assert {nf.name} on {args.target}: No LTL Property violations detected.")
+        else:
+            failed = True
+            print(f"assert {nf.name} on {args.target}: Violation of LTL property {nf.name}")
+            print(f"Trace to property violation in {args.target}:")
+            print(result.counterexample.render())
+        if result.deadlocks:
+            print(f"  note: {args.target} has {result.deadlocks} reachable deadlock/END "
+                  "state(s); finite runs are checked only for safety violations")
+    return 1 if failed else 0

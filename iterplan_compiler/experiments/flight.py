@@ -1,0 +1,160 @@
+"""Fly a generated controller module on the built-in simulator and return its event log.
+
+The thin adapter between the experiments/demo and the runtime's executor
+(:mod:`iterplan_compiler.runtime.executor`): it adds
+
+* a *stop predicate* over executed events (the executor itself stops after ``passes`` iterator
+  passes or a time limit; experiments need "after the 3rd visit of p.0" or "once the region is
+  covered"), and a compact log of the events the measurements need, so a 700,000-location
+  mission does not keep millions of log entries;
+* the example-specific bindings the bundled maps ask for: a Nemo that leaves after being seen
+  ``yes_answers`` times (``"dynamic"`` in find_nemo.json) and the shared data structure of
+  Search and Map (``store.target`` adds the current cell; sensor ``adjacent`` answers for cells
+  next to a stored one; ``"derived"`` in search_and_map.json).
+
+Compute-time accounting stays on (``ideal_compute=False``): time the plan spends iterating is
+flight time, as in the paper.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from iterplan_compiler.experiments.missions import LogEvent
+from iterplan_compiler.experiments.pipeline import StageError
+
+#: Labels kept in the compact log (everything else only goes through the stop predicate).
+KEEP = frozenset({"has.next", "n.next", "go.next", "arrived", "take.photo", "store.target",
+                  "yes.fire", "yes.nemo", "yes.target", "takeoff.ended", "land", "landed",
+                  "restart", "visited.p.0", "visited.p.1", "visited.p.2", "visited.p.3",
+                  "visited.p.4", "visited.p.5", "y.next"})
+
+
+@dataclass
+class FlightResult:
+    """Events executed (in order; all of them if ``full_log``, else :data:`KEEP` ones), the
+    cruise speed used for "ideal" durations, the flown track as (t, x, y) samples, the
+    executor's summary, and why the flight ended."""
+
+    log: list[LogEvent]
+    speed: float
+    track: list[tuple[float, float, float]] = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
+    ok: bool = True
+    reason: str = ""
+    mission: object = None   # the runtime's MissionResult (PNG/GeoJSON writers)
+
+
+class _Stop(Exception):
+    pass
+
+
+def example_bindings(grid, data: dict | None):
+    """Runtime bindings for the bundled maps' ``dynamic`` / ``derived`` sensors."""
+    from iterplan_compiler.runtime.bindings import Bindings
+
+    b = Bindings()
+    data = data or {}
+    for name, spec in (data.get("dynamic") or {}).items():
+        cells = {int(c) for c in grid.sensors.get(name, [])}
+        limit = int(spec.get("yes_answers", 1))
+        seen: dict[int, int] = {}
+
+        def pred(cell: int, cells=cells, limit=limit, seen=seen) -> bool:
+            if cell not in cells or seen.get(cell, 0) >= limit:
+                return False
+            seen[cell] = seen.get(cell, 0) + 1
+            return True
+
+        b.sensor(name, pred)
+    for name, spec in (data.get("derived") or {}).items():
+        action = str(spec.get("neighbours_of", "store.target"))
+        conn = int(spec.get("connectivity", 8))
+        stored: set[int] = set()
+        cols = grid.cols
+
+        def store(ctx, label: str, stored=stored) -> None:
+            cell = ctx.current_cell()
+            if cell is not None and cell >= 0:
+                stored.add(int(cell))
+                ctx.note(f"stored {ctx.grid.cell_name(int(cell))}")
+
+        def adjacent(cell: int, stored=stored, cols=cols, conn=conn) -> bool:
+            r, c = divmod(int(cell), cols)
+            for s in stored:
+                sr, sc = divmod(s, cols)
+                dr, dc = abs(sr - r), abs(sc - c)
+                if (dr <= 1 and dc <= 1) if conn == 8 else (dr + dc <= 1):
+                    return True
+            return False
+
+        b.bind(action, store)
+        b.sensor(name, adjacent)
+    return b
+
+
+def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
+        stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
+        compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
+        map_data: dict | None = None, full_log: bool = False) -> FlightResult:
+    """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
+    ``max_time`` simulated seconds).  Raises :class:`StageError` if the runtime is missing or
+    the module cannot be loaded."""
+    try:
+        from iterplan_compiler.runtime.executor import (
+            Executor,
+            MissionEnd,
+            RunConfig,
+            load_controller,
+        )
+        from iterplan_compiler.runtime.sim import SimVehicle
+    except ImportError as exc:
+        raise StageError("runtime", f"the executor is not available in this build ({exc})") \
+            from None
+    try:
+        table = load_controller(module_path)
+    except ValueError as exc:
+        raise StageError("runtime", str(exc)) from None
+
+    events: list[LogEvent] = []
+    keep = None if full_log else KEEP
+
+    class _Recorder(Executor):
+        """Executor whose log goes through the stop predicate and the compact log."""
+
+        def log_entry(self, kind: str, label: str, cell: int = -1) -> None:
+            if kind not in ("c", "u"):
+                if full_log:
+                    super().log_entry(kind, label, cell)
+                return
+            if keep is not None and label not in keep:
+                return
+            if label == "arrived":
+                cell = self.ctx.last_arrival if self.ctx.last_arrival is not None else -1
+            elif label in ("take.photo", "store.target") or label.startswith("visited."):
+                c = self.ctx.current_cell()
+                cell = -1 if c is None else c
+            elif label == "go.next":
+                n = self.iterator.next
+                cell = -1 if n is None else n
+            p = self.vehicle.pose()
+            ev = LogEvent(round(p.t - self.t0, 3), label, int(cell), p.x, p.y)
+            events.append(ev)
+            if on_event is not None:
+                on_event(ev)
+            if stop is not None and stop(ev):
+                raise MissionEnd(True, "stop condition reached")
+
+    vehicle = SimVehicle(home=grid.home, heading=grid.arrival_heading)
+    cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
+                    max_time=max_time, log_limit=0, end_action="loiter")
+    try:
+        ex = _Recorder(table, grid, vehicle, example_bindings(grid, map_data), cfg)
+    except ValueError as exc:   # BindingError is a ValueError: the map lacks a sensor
+        raise StageError("runtime", str(exc)) from None
+    result = ex.run()
+    track = [(float(t), float(x), float(y)) for t, x, y, _ in result.track]
+    return FlightResult(events, float(vehicle.airspeed), track, dict(result.summary),
+                        bool(result.ok), str(result.reason), result)

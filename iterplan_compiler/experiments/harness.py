@@ -1,0 +1,199 @@
+"""Run experiment cases, in parallel, with a progress bar; collect rows; write CSV.
+
+A *runner* is a picklable callable ``runner(case) -> dict`` returning at least ``duration``
+and ``ideal`` (seconds); it may add more numeric fields.  A runner that raises is recorded as
+a failed row (``error`` column) rather than aborting the sweep: one crashed simulation must not
+throw away hours of others.
+
+Executors: ``jobs == 1`` runs in this process (deterministic order, easiest to debug);
+``jobs > 1`` uses a :class:`concurrent.futures.ProcessPoolExecutor`; a Dask scheduler address
+uses ``dask.distributed`` if it is installed.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import dataclasses
+import io
+import math
+import sys
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import TextIO
+
+from iterplan_compiler.experiments.stats import overhead, summarize
+from iterplan_compiler.experiments.sweeps import Case
+
+Runner = Callable[[Case], dict]
+
+CASE_FIELDS = [f.name for f in dataclasses.fields(Case)]
+RESULT_FIELDS = ["duration", "ideal", "overhead_pct", "wall_s", "error"]
+
+
+class ExperimentError(RuntimeError):
+    """A sweep cannot run (e.g. a missing optional dependency); the message is for the user."""
+
+
+class Progress:
+    """A small text progress bar on ``stream`` (redrawn in place on a terminal, a line every
+    10 % otherwise, so CI logs stay short)."""
+
+    def __init__(self, total: int, label: str, stream: TextIO | None = None,
+                 enabled: bool = True):
+        self.total, self.label, self.done, self.failed = total, label, 0, 0
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = enabled
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.start = time.monotonic()
+        self._last_decile = -1
+
+    def update(self, ok: bool = True) -> None:
+        self.done += 1
+        self.failed += 0 if ok else 1
+        if not self.enabled:
+            return
+        frac = self.done / self.total if self.total else 1.0
+        width = 30
+        bar = "#" * int(frac * width) + "." * (width - int(frac * width))
+        elapsed = time.monotonic() - self.start
+        eta = elapsed / self.done * (self.total - self.done) if self.done else 0.0
+        fail = f", {self.failed} failed" if self.failed else ""
+        text = (f"{self.label} [{bar}] {self.done}/{self.total}{fail} "
+                f"{elapsed:6.1f}s elapsed, ~{eta:5.1f}s left")
+        if self.tty:
+            end = "\n" if self.done == self.total else ""
+            self.stream.write("\r" + text + end)
+            self.stream.flush()
+        else:
+            decile = int(frac * 10)
+            if decile != self._last_decile or self.done == self.total:
+                self._last_decile = decile
+                self.stream.write(text + "\n")
+                self.stream.flush()
+
+
+def _run_one(runner: Runner, case: Case) -> dict:
+    """Run one case, never raising: failures become a row with ``error`` set."""
+    t0 = time.perf_counter()
+    row: dict = dataclasses.asdict(case)
+    try:
+        res = dict(runner(case))
+        row.update(res)
+        row["overhead_pct"] = overhead(float(res["duration"]), float(res["ideal"]))
+        row["error"] = ""
+    except Exception as exc:  # a failed simulation is data, not a crash of the sweep
+        row.update(duration=math.nan, ideal=math.nan, overhead_pct=math.nan,
+                   error=f"{type(exc).__name__}: {exc}".replace("\n", " ")[:300])
+    row["wall_s"] = round(time.perf_counter() - t0, 3)
+    return row
+
+
+def run_cases(cases: Sequence[Case], runner: Runner, *, jobs: int = 1,
+              scheduler: str | None = None, progress: Progress | None = None) -> list[dict]:
+    """Run every case; rows come back in the order of ``cases`` whatever the executor."""
+    rows: list[dict | None] = [None] * len(cases)
+
+    def done(i: int, row: dict) -> None:
+        rows[i] = row
+        if progress is not None:
+            progress.update(ok=not row.get("error"))
+
+    if scheduler:
+        try:
+            from dask.distributed import Client, as_completed  # type: ignore[import-not-found]
+        except ImportError:
+            raise ExperimentError("--scheduler needs dask.distributed "
+                                  "(pip install 'dask[distributed]')") from None
+        client = Client(scheduler)
+        try:
+            futures = {client.submit(_run_one, runner, c, pure=False): i
+                       for i, c in enumerate(cases)}
+            for fut in as_completed(futures):
+                done(futures[fut], fut.result())
+        finally:
+            client.close()
+    elif jobs <= 1:
+        for i, case in enumerate(cases):
+            done(i, _run_one(runner, case))
+    else:
+        with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
+            futs = {pool.submit(_run_one, runner, c): i for i, c in enumerate(cases)}
+            for fut in cf.as_completed(futs):
+                done(futs[fut], fut.result())
+    return [r for r in rows if r is not None]
+
+
+def extra_fields(rows: Iterable[dict]) -> list[str]:
+    known = set(CASE_FIELDS) | set(RESULT_FIELDS)
+    return sorted({k for r in rows for k in r if k not in known})
+
+
+def write_csv(rows: Sequence[dict], path: Path | None = None) -> str:
+    """Write the per-run rows as CSV (to ``path`` if given); return the text."""
+    fields = CASE_FIELDS + RESULT_FIELDS + extra_fields(rows)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n", extrasaction="ignore")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: _fmt(r.get(k, "")) for k in fields})
+    text = buf.getvalue()
+    if path is not None:
+        path.write_text(text)
+    return text
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return "" if math.isnan(v) else f"{v:.6g}"
+    return v
+
+
+@dataclasses.dataclass(frozen=True)
+class Point:
+    """One aggregated point of a plot: the mean ± 3 SEM of a metric over the seeds."""
+
+    experiment: str
+    universe: int
+    count: int
+    sorter: str
+    n: int
+    duration: float
+    duration_err3: float
+    ideal: float
+    overhead_pct: float
+    overhead_err3: float
+    failed: int
+
+
+def aggregate(rows: Iterable[dict]) -> list[Point]:
+    """Group rows by (experiment, universe, count, sorter) and summarise them."""
+    groups: dict[tuple, list[dict]] = defaultdict(list)
+    for r in rows:
+        groups[(r["experiment"], int(r["universe"]), int(r["count"]), r["sorter"])].append(r)
+    points = []
+    for key in sorted(groups):
+        rs = groups[key]
+        ok = [r for r in rs if not r.get("error")]
+        d = summarize(float(r["duration"]) for r in ok)
+        o = summarize(float(r["overhead_pct"]) for r in ok)
+        ideal = summarize(float(r["ideal"]) for r in ok).mean
+        points.append(Point(*key, n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
+                            overhead_pct=o.mean, overhead_err3=o.err3,
+                            failed=len(rs) - len(ok)))
+    return points
+
+
+def write_summary_csv(points: Sequence[Point], path: Path | None = None) -> str:
+    fields = [f.name for f in dataclasses.fields(Point)]
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    w.writeheader()
+    for p in points:
+        w.writerow({k: _fmt(v) for k, v in dataclasses.asdict(p).items()})
+    text = buf.getvalue()
+    if path is not None:
+        path.write_text(text)
+    return text

@@ -1,0 +1,149 @@
+"""One simulated mission per experiment case, and the measurements taken from its event log.
+
+Measurements (what Fig. 3 plots):
+
+* Ordered Patrol (fig3b): the *loop time* — time between two consecutive visits of the first
+  patrol location (``visited.p.0``), i.e. one pass p.0 -> p.1 -> p.2 -> p.0.  Ideal: the closed
+  tour through the three locations at constant speed.
+* Cover (fig3c, fig3d): the *cover time* — from the moment the plan starts (the first
+  ``has.next``) until every location of the region has been arrived at.  Ideal: reach the
+  nearest region cell, then one cell side per further cell, at constant speed.
+
+The runtime's compute-time accounting is on: time the plan spends iterating is flight time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from iterplan_compiler.experiments.stats import ideal_cover, ideal_patrol_loop
+from iterplan_compiler.experiments.sweeps import Case, case_map_data
+
+EXAMPLE_OF = {"fig3b": "ordered_patrol", "fig3c": "cover", "fig3d": "cover"}
+
+
+@dataclass(frozen=True)
+class LogEvent:
+    """One executed event: simulation time (s), label, current cell (-1 if none), pose."""
+
+    t: float
+    label: str
+    cell: int = -1
+    x: float = math.nan
+    y: float = math.nan
+
+
+class MeasurementError(RuntimeError):
+    """The log does not contain what the measurement needs (mission cut short?)."""
+
+
+def loop_times(log: Sequence[LogEvent], marker: str = "visited.p.0") -> list[float]:
+    """Durations between consecutive occurrences of ``marker``."""
+    ts = [e.t for e in log if e.label == marker]
+    return [b - a for a, b in zip(ts[:-1], ts[1:], strict=True)]
+
+
+def cover_time(log: Sequence[LogEvent], region: Iterable[int]) -> tuple[float, LogEvent]:
+    """(seconds from the first ``has.next`` until all ``region`` cells were arrived at, the
+    start event).  Raises :class:`MeasurementError` if the region was not covered."""
+    todo = set(int(c) for c in region)
+    start = next((e for e in log if e.label == "has.next"), None)
+    if start is None:
+        raise MeasurementError("the plan never started (no has.next in the log)")
+    for e in log:
+        if e.label == "arrived" and e.cell in todo:
+            todo.discard(e.cell)
+            if not todo:
+                return e.t - start.t, start
+    raise MeasurementError(f"{len(todo)} region cell(s) never visited")
+
+
+def measure(case: Case, log: Sequence[LogEvent], grid, speed: float) -> dict:
+    """The case's duration and ideal from its event log."""
+    if case.experiment == "fig3b":
+        loops = loop_times(log)
+        if len(loops) < case.loops:
+            raise MeasurementError(f"only {len(loops)} complete patrol loop(s) in the log")
+        points = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
+        dur = sum(loops[: case.loops]) / case.loops
+        return {"duration": dur, "ideal": ideal_patrol_loop(points, speed),
+                "events": len(log)}
+    region = [int(c) for c in grid.sensors["cover"]]
+    dur, start = cover_time(log, region)
+    centres = [grid.centre(c) for c in region]
+    return {"duration": dur, "ideal": ideal_cover((start.x, start.y), centres,
+                                                  grid.cell_size, speed),
+            "events": len(log)}
+
+
+def build_grid(case: Case):
+    """The case's GridMap (runtime), with exactly ``case.universe`` locations."""
+    import numpy as np
+
+    from iterplan_compiler.runtime.grid import load_map
+
+    grid = load_map(data=case_map_data(case))
+    grid.cells = np.arange(case.universe, dtype=np.int64)
+    return grid
+
+
+class StopWhen:
+    """Stop predicate over logged events: Ordered Patrol stops after ``loops + 1`` visits of
+    p.0; Cover stops once every region cell has been arrived at (or after a full pass of the
+    iterator, ``n.next``, which means some region cell was skipped)."""
+
+    def __init__(self, case: Case, grid):
+        self.patrol = case.experiment == "fig3b"
+        self.needed = case.loops + 1
+        self.seen = 0
+        self.todo = set() if self.patrol else {int(c) for c in grid.sensors["cover"]}
+
+    def __call__(self, event: LogEvent) -> bool:
+        if self.patrol:
+            self.seen += event.label == "visited.p.0"
+            return self.seen >= self.needed
+        if event.label == "arrived":
+            self.todo.discard(event.cell)
+            return not self.todo
+        return event.label == "n.next"
+
+
+def preflight(experiment: str, ctrl_dir: Path) -> str | None:
+    """Compile the experiment's controller once (into ``ctrl_dir``) and check the runtime;
+    return a message saying what is missing, or None when everything is there."""
+    from iterplan_compiler.experiments.pipeline import StageError, compile_example
+
+    try:
+        compile_example(EXAMPLE_OF[experiment], ctrl_dir)
+    except StageError as exc:
+        return str(exc)
+    try:
+        from iterplan_compiler.runtime import executor  # noqa: F401
+    except ImportError as exc:
+        return f"runtime executor not available in this build ({exc})"
+    return None
+
+
+class Runner:
+    """Picklable case runner for :func:`harness.run_cases` (imports lazily in the worker)."""
+
+    def __init__(self, ctrl_dir: str):
+        self.ctrl_dir = ctrl_dir
+
+    def __call__(self, case: Case) -> dict:
+        from iterplan_compiler.experiments import flight
+
+        name = EXAMPLE_OF[case.experiment]
+        module = Path(self.ctrl_dir) / f"{name}_controller.py"
+        grid = build_grid(case)
+        res = flight.fly(module, grid, sorter=case.sorter, seed=case.seed,
+                         stop=StopWhen(case, grid))
+        if not res.ok:
+            raise MeasurementError(f"mission ended early: {res.reason}")
+        out = measure(case, res.log, grid, res.speed)
+        out["compute_s"] = float(res.summary.get("compute_s", 0.0) or 0.0)
+        out["steps"] = int(res.summary.get("steps", 0) or 0)
+        return out

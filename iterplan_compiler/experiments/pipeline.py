@@ -1,0 +1,105 @@
+"""Spec -> generated controller module, for the demo, the experiments and the example tests.
+
+Each stage is imported lazily and a missing or failing stage comes back as a readable message
+(:class:`StageError`), never as a traceback: other parts of the toolkit may be absent in a
+partial build.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+from iterplan_compiler.experiments.catalog import EXAMPLES, example_path
+
+
+class StageError(RuntimeError):
+    """A pipeline stage is missing or reported errors; ``stage`` names it, the message says
+    what to do."""
+
+    def __init__(self, stage: str, message: str):
+        self.stage = stage
+        super().__init__(f"{stage}: {message}")
+
+
+def _render(diags, sources) -> str:
+    try:
+        from iterplan_compiler.diagnostics import render
+
+        return render(list(diags), sources)
+    except Exception:  # rendering is best effort; the codes and messages are what matter
+        return "\n".join(f"{getattr(d, 'code', '?')}: {getattr(d, 'message', d)}" for d in diags)
+
+
+#: (stage, module, attribute) that the compile pipeline needs.
+STAGES = (
+    ("front-end", "iterplan_compiler.frontend", "load"),
+    ("synthesis", "iterplan_compiler.synthesis.driver", "synthesize"),
+    ("back-end", "iterplan_compiler.backends.driver", "compile_spec"),
+)
+
+
+def missing_stage() -> StageError | None:
+    """The first pipeline stage that is not part of this build, if any."""
+    for stage, module, attr in STAGES:
+        try:
+            mod = importlib.import_module(module)
+        except ImportError as exc:
+            return StageError(stage, f"not available in this build ({exc})")
+        if not hasattr(mod, attr):
+            return StageError(stage, f"not available in this build ({module}.{attr} missing)")
+    return None
+
+
+def compile_to_source(spec: Path, composite: str | None = None,
+                      text: str | None = None) -> tuple[str, dict]:
+    """Run front-end, synthesis and the Python back-end; return (module source, stats)."""
+    missing = missing_stage()
+    if missing is not None:
+        raise missing
+    from iterplan_compiler.backends.driver import compile_spec
+
+    try:
+        out = compile_spec(spec, composite=composite, text=text)
+    except Exception as exc:  # a bug in another stage: report it, do not crash the caller
+        raise StageError("compile", f"internal error while compiling {spec.name}: "
+                         f"{type(exc).__name__}: {exc}") from None
+    if out.text is None:
+        raise StageError("compile", "the spec did not compile:\n" +
+                         _render(out.diagnostics, out.sources))
+    return out.text, dict(out.stats)
+
+
+def import_module_file(path: Path, name: str) -> ModuleType:
+    """Import a generated controller module from ``path`` under module name ``name``."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise StageError("import", f"cannot import {path}")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def compile_example(name: str, out_dir: Path, *, text: str | None = None) -> tuple[Path, dict]:
+    """Compile bundled example ``name`` into ``out_dir/<name>_controller.py``.
+
+    The module is reused when it exists and was generated from the same spec text (its header
+    records the spec's sha256), so sweeps compile once.
+    """
+    ex = EXAMPLES[name]
+    spec = example_path(name)
+    src_text = text if text is not None else spec.read_text()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    target = out_dir / f"{name}_controller.py"
+    from hashlib import sha256
+
+    digest = sha256(src_text.encode("utf-8")).hexdigest()
+    if target.exists() and digest in target.read_text():
+        return target, {"cached": True}
+    source, stats = compile_to_source(spec, ex.composite, text=src_text)
+    target.write_text(source)
+    return target, stats

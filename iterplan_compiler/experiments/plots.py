@@ -1,0 +1,66 @@
+"""Matplotlib figures in the layout of the paper's Fig. 3 (b)-(d).
+
+Error bars are 3 SEM, as in the paper; the "ideal" curve is the minimum-distance duration at
+constant speed.  Uses the non-interactive Agg backend, so it works without a display.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from iterplan_compiler.experiments.harness import Point
+
+TITLES = {
+    "fig3b": "Ordered Patrol: loop time vs number of locations",
+    "fig3c": "Cover: overhead vs locations to cover (universe 713)",
+    "fig3d": "Cover of 61 locations: duration vs number of locations",
+}
+MARKERS = {"distance": "o", "last": "s", "random": "^"}
+
+
+def plot(experiment: str, points: Sequence[Point], path: Path) -> Path:
+    """Draw one experiment's figure to ``path`` (PNG); returns the path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pts = [p for p in points if p.experiment == experiment and p.n > 0]
+    # x: what the experiment varies.
+    xof = (lambda p: p.count) if experiment == "fig3c" else (lambda p: p.universe)
+    fig, ax = plt.subplots(figsize=(5.0, 3.6), dpi=120)
+    for sorter in sorted({p.sorter for p in pts}):
+        sp = sorted((p for p in pts if p.sorter == sorter), key=xof)
+        if experiment == "fig3c":
+            ys, es = [p.overhead_pct for p in sp], [p.overhead_err3 for p in sp]
+        elif experiment == "fig3b":
+            ys, es = [p.duration / 60.0 for p in sp], [p.duration_err3 / 60.0 for p in sp]
+        else:
+            ys, es = [p.duration / 60.0 for p in sp], [p.duration_err3 / 60.0 for p in sp]
+        ax.errorbar([xof(p) for p in sp], ys, yerr=es, marker=MARKERS.get(sorter, "x"),
+                    capsize=3, linestyle="-", label=sorter)
+    if experiment != "fig3c" and pts:
+        ideal = {}
+        for p in pts:
+            ideal.setdefault(xof(p), []).append(p.ideal)
+        xs = sorted(ideal)
+        ax.plot(xs, [sum(ideal[x]) / len(ideal[x]) / 60.0 for x in xs], "k--", label="ideal")
+    if experiment == "fig3c":
+        ax.set_xlabel("locations to cover")
+        ax.set_ylabel("overhead over ideal [%]")
+    else:
+        ax.set_xlabel("number of locations")
+        ax.set_ylabel("loop time [min]" if experiment == "fig3b" else "cover time [min]")
+        if pts and max(xof(p) for p in pts) / max(1, min(xof(p) for p in pts)) > 50:
+            ax.set_xscale("log")
+    ax.set_title(TITLES.get(experiment, experiment), fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.text(0.01, 0.01, "error bars: 3 SEM", fontsize=6)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # No timestamp in PNG metadata: re-running gives the same file for the same data.
+    fig.savefig(path, metadata={"Software": None})
+    plt.close(fig)
+    return path

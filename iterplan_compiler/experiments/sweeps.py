@@ -1,0 +1,143 @@
+"""What each experiment of Fig. 3 varies, and the synthetic maps its cases fly over.
+
+A :class:`Case` is one simulated mission: an experiment name, the number of locations in the
+iterator (the *universe*), the number of locations to cover (Cover only), a sorter and a seed.
+Full sizes follow the paper (Ordered Patrol up to 700,000 locations, 30 runs per point; Cover
+with a 713-location universe, 6 runs per point; Cover of 61 locations for growing universes);
+``quick`` sizes are small enough for CI.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+SORTERS: tuple[str, ...] = ("distance", "last", "random")
+EXPERIMENTS: tuple[str, ...] = ("fig3b", "fig3c", "fig3d")
+
+#: Patrol locations of Fig. 3(b) as (col, row) cells, near the launch cell (0, 0), visited in
+#: this order.  The universe grows around them (the paper's Fig. 3(a)).
+PATROL_CELLS: tuple[tuple[int, int], ...] = ((2, 2), (9, 3), (5, 9))
+#: South-west corner (col, row) of the Cover region.
+COVER_OFFSET: tuple[int, int] = (4, 4)
+COVER_UNIVERSE_3C = 713
+COVER_COUNT_3D = 61
+
+
+@dataclass(frozen=True, order=True)
+class Case:
+    """One simulated mission.  ``count`` is the number of locations to cover (Cover) or of
+    patrol locations (Ordered Patrol); ``loops`` the number of patrol loops measured."""
+
+    experiment: str
+    universe: int
+    count: int
+    sorter: str
+    seed: int
+    loops: int = 1
+
+    @property
+    def key(self) -> tuple:
+        """The point of the plot this case contributes a sample to."""
+        return (self.experiment, self.universe, self.count, self.sorter)
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """Sizes of one experiment."""
+
+    experiment: str
+    universes: tuple[int, ...]
+    counts: tuple[int, ...]
+    seeds: int
+    sorters: tuple[str, ...] = SORTERS
+    loops: int = 1
+
+
+FULL: dict[str, SweepConfig] = {
+    "fig3b": SweepConfig("fig3b", (1_000, 10_000, 50_000, 100_000, 200_000, 400_000, 700_000),
+                         (3,), seeds=30, loops=2),
+    "fig3c": SweepConfig("fig3c", (COVER_UNIVERSE_3C,), (10, 25, 61, 100, 150, 200, 300),
+                         seeds=6),
+    "fig3d": SweepConfig("fig3d", (200, 713, 2_000, 10_000, 50_000, 100_000, 200_000),
+                         (COVER_COUNT_3D,), seeds=6),
+}
+
+QUICK: dict[str, SweepConfig] = {
+    "fig3b": SweepConfig("fig3b", (144, 400), (3,), seeds=2, loops=1),
+    "fig3c": SweepConfig("fig3c", (COVER_UNIVERSE_3C,), (6, 16), seeds=2),
+    "fig3d": SweepConfig("fig3d", (169, 400), (16,), seeds=2),
+}
+
+
+def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
+          sorters: tuple[str, ...] | None = None,
+          universes: tuple[int, ...] | None = None) -> list[Case]:
+    """The cases of one experiment, in a deterministic order (largest first, so the slow
+    cases start early when run in parallel)."""
+    table = QUICK if quick else FULL
+    if experiment not in table:
+        raise ValueError(f"unknown experiment {experiment!r}; expected one of "
+                         f"{', '.join(EXPERIMENTS)}")
+    cfg = table[experiment]
+    n_seeds = cfg.seeds if seeds is None else seeds
+    if n_seeds < 1:
+        raise ValueError("seeds must be at least 1")
+    cases = [Case(experiment, u, c, s, seed, cfg.loops)
+             for u in (universes or cfg.universes) for c in cfg.counts
+             for s in (sorters or cfg.sorters) for seed in range(n_seeds)]
+    for case in cases:
+        check_case(case)
+    return sorted(cases, key=lambda c: (-c.universe * max(c.count, 1), c))
+
+
+def grid_shape(universe: int) -> tuple[int, int]:
+    """(cols, rows) of the near-square grid holding ``universe`` locations (the last row may be
+    partial)."""
+    if universe < 1:
+        raise ValueError("universe must be positive")
+    cols = math.ceil(math.sqrt(universe))
+    rows = math.ceil(universe / cols)
+    return cols, rows
+
+
+def region_cells(count: int, offset: tuple[int, int] = COVER_OFFSET) -> list[tuple[int, int]]:
+    """``count`` contiguous (col, row) cells: row by row in a near-square block at ``offset``."""
+    side = math.ceil(math.sqrt(count))
+    return [(offset[0] + i % side, offset[1] + i // side) for i in range(count)]
+
+
+def check_case(case: Case) -> None:
+    """Raise ValueError if the case's special cells do not fit in its universe."""
+    cols, rows = grid_shape(case.universe)
+    if case.experiment == "fig3b":
+        special = list(PATROL_CELLS[: case.count])
+        if case.count > len(PATROL_CELLS):
+            raise ValueError(f"at most {len(PATROL_CELLS)} patrol locations are placed")
+    else:
+        special = region_cells(case.count)
+    for col, row in special:
+        if col >= cols or row * cols + col >= case.universe:
+            raise ValueError(f"{case}: cell ({col}, {row}) is outside a {case.universe}-location "
+                             f"universe ({cols} columns)")
+
+
+def case_map_data(case: Case) -> dict:
+    """The case's map in the runtime's map schema (``runtime.grid.load_map(data=...)``), plus
+    ``"cells"``: the number of leading cell ids (row-major) that are locations."""
+    cols, rows = grid_shape(case.universe)
+    data: dict = {
+        "name": f"{case.experiment}-{case.universe}-{case.count}",
+        "cell_size": 50,
+        "cols": cols,
+        "rows": rows,
+        "home": {"cell": "A1"},
+        "arrival_heading": 0,
+        "sensors": {},
+    }
+    if case.experiment == "fig3b":
+        for i, (c, r) in enumerate(PATROL_CELLS[: case.count]):
+            data["sensors"][f"p.{i}"] = [[c, r]]
+    else:
+        data["sensors"]["cover"] = [[c, r] for c, r in region_cells(case.count)]
+    return data

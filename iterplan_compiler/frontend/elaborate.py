@@ -1,0 +1,690 @@
+"""Elaboration: :class:`~syntax.SpecFile` → :class:`~iterplan_compiler.ir.model.Model`.
+
+Global tables (const, range, set, def) are evaluated in source order (MTSA evaluates them at
+declaration).  Processes, composites, fluents, formulas and controller specs may be used
+before they are declared.  Process/composite LTSs are built lazily by :class:`Elaborator`
+(the model's backend) and cached by instance name (``P``, ``P(2)``).
+
+Codes: E0101 duplicate definition (with the first site), E0102 undefined process/composite,
+E0103 operator keywords out of order, E0401 recursive composition, E0402 state explosion,
+E0403 composite operator failed (e.g. ``property`` of a nondeterministic machine),
+E0501 fluent sets not disjoint, E0601 undefined name in a formula, E0602 recursive assert,
+E0701 undefined spec / name in a spec, E0900 needs a component that is not available,
+E0901 synthesis failed/unrealizable, W0151 ignored declaration.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from fractions import Fraction
+
+from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
+from iterplan_compiler.frontend import syntax as S
+from iterplan_compiler.frontend.expressions import (
+    Env,
+    EvalError,
+    Tables,
+    Value,
+    bind_all,
+    evaluate,
+    expand_label,
+    expand_label_env,
+    expand_relabels,
+    expand_set,
+    fmt,
+    part_values,
+    to_int,
+    truth,
+)
+from iterplan_compiler.frontend.processes import build_process
+from iterplan_compiler.ir import formulas as F
+from iterplan_compiler.ir.lts import LTS, TAU, make_lts, reachable, renamed
+from iterplan_compiler.ir.model import ControllerSpec, Model, ModelBackend, SynthesisProblem
+
+OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "property",
+            "optimistic", "pessimistic", "component", "controller", "gr", "rtc", "rtcAnalysis",
+            "starenv", "plant", "checkCompatibility", "controlled_det", "probabilistic", "mdp",
+            "heuristic", "monolithicDirector")
+SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector",
+                                "checkCompatibility"})
+# Parsed, accepted at load time, but building such a composite reports E0150.
+UNSUPPORTED_AT_BUILD = frozenset({"plant", "controlled_det"})
+UNSUPPORTED_KEYWORDS = frozenset({"closure", "abstract", "optimistic", "pessimistic",
+                                  "component", "rtc", "rtcAnalysis", "starenv", "probabilistic",
+                                  "mdp"})
+MAX_STATES = 2_000_000
+
+
+def relabel(lts: LTS, mapping: Mapping[str, list[str]]) -> LTS:
+    """MTSA relabelling: a label is renamed at its longest listed dotted prefix (§2.3)."""
+    if not mapping:
+        return lts
+    keys = sorted(mapping, key=len, reverse=True)
+
+    def image(a: str) -> list[str]:
+        if a == TAU:
+            return [a]
+        for k in keys:
+            if a == k:
+                return list(mapping[k])
+            if a.startswith(k + "."):
+                return [n + a[len(k):] for n in mapping[k]]
+        return [a]
+
+    trans = [(s, b, t) for s, a, t in lts.transitions for b in image(a)]
+    alpha = {b for a in lts.alphabet for b in image(a)}
+    return make_lts(lts.name, lts.num_states, trans, alpha, lts.initial, lts.end_states,
+                    lts.state_names)
+
+
+def _instance_name(name: str, args: tuple[Value, ...]) -> str:
+    return f"{name}({','.join(fmt(a) for a in args)})" if args else name
+
+
+class Elaborator(ModelBackend):
+    """Holds the declaration tables and builds LTSs on demand (the :class:`Model` backend)."""
+
+    def __init__(self, spec: S.SpecFile, diags: list[Diagnostic]):
+        self.spec = spec
+        self.consts: dict[str, Value] = {}
+        self.ranges: dict[str, tuple[int, int]] = {}
+        self.sets: dict[str, tuple[str, ...]] = {}
+        self.defs: dict[str, S.DefDecl] = {}
+        self.processes: dict[str, S.ProcessDecl] = {}
+        self.composites: dict[str, S.CompositeDecl] = {}
+        self.formula_decls: dict[str, S.FormulaDecl] = {}
+        self.fluent_decls: dict[str, S.FluentDecl] = {}
+        self.spec_decls: dict[str, S.SpecDecl] = {}
+        self.fluents: dict[str, F.Fluent] = {}
+        self.fluent_families: dict[str, list[str]] = {}
+        self.formulas: dict[str, F.NamedFormula] = {}
+        self.specs: dict[str, ControllerSpec] = {}
+        self.formula_errors: dict[str, Diagnostic] = {}
+        self.cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
+        self.building: list[str] = []
+        self._collect(diags)
+
+    # ------------------------------------------------------------------ tables
+    @property
+    def tables(self) -> Tables:
+        return Tables(self.consts, self.ranges, self.sets, self.defs)
+
+    def env(self) -> Env:
+        return Env(self.tables)
+
+    def _collect(self, diags: list[Diagnostic]) -> None:
+        seen: dict[tuple[str, str], Span] = {}
+
+        def dup(kind: str, name: str, span: Span) -> bool:
+            key = (kind, name)
+            if key in seen:
+                diags.append(error("E0101", f"duplicate definition of {kind} '{name}'", span,
+                                   Related(seen[key], "first definition here")))
+                return True
+            seen[key] = span
+            return False
+
+        for d in self.spec.decls:
+            try:
+                if isinstance(d, S.ConstDecl):
+                    if not dup("constant", d.name, d.span):
+                        self.consts[d.name] = evaluate(d.value, self.env())
+                elif isinstance(d, S.RangeDecl):
+                    if not dup("range", d.name, d.span):
+                        lo = to_int(evaluate(d.low, self.env()), d.span)
+                        hi = to_int(evaluate(d.high, self.env()), d.span)
+                        if lo > hi:
+                            diags.append(error("E0204", f"empty range {d.name} = {lo}..{hi}",
+                                               d.span))
+                        self.ranges[d.name] = (lo, hi)
+                elif isinstance(d, S.SetDecl):
+                    if not dup("set", d.name, d.span):
+                        self.sets[d.name] = expand_set(d.value, self.env())
+                elif isinstance(d, S.DefDecl):
+                    if not dup("def", d.name, d.span):
+                        self.defs[d.name] = d
+                elif isinstance(d, S.ProcessDecl):
+                    if d.name in ("STOP", "END", "ERROR"):
+                        diags.append(error("E0101", f"'{d.name}' is a reserved name", d.span))
+                    elif not dup("process", d.name, d.span):
+                        self.processes[d.name] = d
+                        self._check_keywords(d.keywords, d.span, diags)
+                elif isinstance(d, S.CompositeDecl):
+                    # MTSA keeps processes and composites in separate tables (`||TUNER = TUNER.`)
+                    if not dup("composite", d.name, d.span):
+                        self.composites[d.name] = d
+                        self._check_keywords(d.keywords, d.span, diags)
+                elif isinstance(d, S.FormulaDecl):
+                    if not dup("assertion", d.name, d.span):
+                        self.formula_decls[d.name] = d
+                elif isinstance(d, S.FluentDecl):
+                    if not dup("fluent", d.name, d.span):
+                        self.fluent_decls[d.name] = d
+                elif isinstance(d, S.SpecDecl):
+                    if not dup("controllerSpec", d.name, d.span):
+                        self.spec_decls[d.name] = d
+                elif isinstance(d, S.IgnoredDecl):
+                    diags.append(warning("W0151", f"'{d.kind}' declaration {d.name} is ignored",
+                                         d.span))
+                elif isinstance(d, S.IncludeDecl):  # resolved by includes.py before us
+                    pass
+            except EvalError as e:
+                diags.append(e.diag)
+        self._fluents(diags)
+        self._formulas(diags)
+        self._specs(diags)
+        self._check_recursion(diags)
+
+    def _check_keywords(self, kws: tuple[str, ...], span: Span, diags: list[Diagnostic]) -> None:
+        pos = [OP_ORDER.index(k) for k in kws]
+        if pos != sorted(pos) or len(set(pos)) != len(pos):
+            diags.append(error("E0103", "operator keywords must appear in the order: "
+                               + " ".join(k for k in OP_ORDER if k in kws), span))
+        for k in kws:
+            if k in UNSUPPORTED_KEYWORDS:
+                diags.append(error("E0150", f"unsupported construct: operator '{k}'", span))
+
+    # ------------------------------------------------------------------ fluents
+    def _fluents(self, diags: list[Diagnostic]) -> None:
+        for name, d in self.fluent_decls.items():
+            members: list[str] = []
+            try:
+                keys: list[tuple[str, Env]] = [(name, self.env())]
+                for part in d.indices:
+                    keys = [(f"{k}.{t}", e2) for k, e in keys for t, e2 in part_values(part, e)]
+                for key, env in keys:
+                    ini = frozenset(expand_label(d.initiating, env))
+                    ter = frozenset(expand_label(d.terminating, env))
+                    both = ini & ter
+                    if both:
+                        diags.append(error("E0501", f"fluent {key}: initiating and terminating "
+                                           f"sets share {', '.join(sorted(both))}", d.span))
+                    init = bool(d.initially is not None and truth(evaluate(d.initially, env),
+                                                                  d.span))
+                    self.fluents[key] = F.Fluent(key, ini, ter, init, d.span)
+                    members.append(key)
+            except EvalError as e:
+                diags.append(e.diag)
+            self.fluent_families[name] = members
+
+    # ------------------------------------------------------------------ formulas
+    def _formulas(self, diags: list[Diagnostic]) -> None:
+        for name, d in self.formula_decls.items():
+            try:
+                env = self.env().with_params(
+                    {p.name: evaluate(p.default, self.env()) for p in d.params})
+                f = self.formula(d.formula, env, (name,))
+                ext = frozenset(expand_set(d.extension, env)) if d.extension else frozenset()
+                self.formulas[name] = F.NamedFormula(name, d.kind, f, ext, d.span)
+            except EvalError as e:
+                # MTSA compiles formulas lazily: a broken, unused formula is not an error.  We
+                # warn now and report the error where the formula is used.
+                self.formula_errors[name] = e.diag
+                diags.append(warning("W0603", f"{d.kind} {name} is not usable: "
+                                     f"{e.diag.message}", e.diag.span))
+
+    def formula(self, f: S.FNode, env: Env, stack: tuple[str, ...]) -> F.Formula:
+        """Syntactic formula → IR formula (fluent families, quantifiers, asserts expanded)."""
+        if isinstance(f, S.FUnary):
+            a = self.formula(f.arg, env, stack)
+            return {"!": F.Not, "X": F.Next, "[]": F.Always, "<>": F.Eventually}[f.op](a)
+        if isinstance(f, S.FBinary):
+            a = self.formula(f.left, env, stack)
+            b = self.formula(f.right, env, stack)
+            cls = {"&&": F.And, "||": F.Or, "->": F.Implies, "<->": F.Iff, "U": F.Until,
+                   "W": F.WeakUntil}[f.op]
+            return cls(a, b)
+        if isinstance(f, S.FQuant):
+            parts = [self.formula(f.body, e2, stack) for e2 in bind_all(f.binds, env)]
+            return _fold(F.Or if f.kind == "exists" else F.And, parts, f.kind == "forall")
+        if isinstance(f, S.FRigid):
+            return F.Const(truth(evaluate(f.expr, env), f.span))
+        if isinstance(f, S.FAction):
+            return F.ActionProp(frozenset(expand_label(f.label, env)))
+        if isinstance(f, S.FCall):
+            return self._assert_ref(f.name, f.args, env, stack, f.span)
+        # FRef
+        if f.name in self.fluent_families:
+            if not f.indices:
+                if f.name in self.fluents:
+                    return F.FluentProp(f.name)
+                raise EvalError(error("E0601", f"indexed fluent family '{f.name}' used without "
+                                      "an index", f.span))
+            keys = [f.name]
+            for part in f.indices:
+                keys = [f"{k}.{t}" for k in keys for t, _ in part_values(part, env)]
+            for k in keys:
+                if k not in self.fluents:
+                    raise EvalError(error("E0601", f"undefined fluent '{k}'", f.span))
+            return _fold(F.Or, [F.FluentProp(k) for k in keys], False)
+        if f.name in self.formula_decls and not f.indices:
+            return self._assert_ref(f.name, (), env, stack, f.span)
+        raise EvalError(error("E0601", f"'{f.name}' is neither a fluent nor an assert", f.span))
+
+    def _assert_ref(self, name: str, args: tuple[S.Expr, ...], env: Env,
+                    stack: tuple[str, ...], span: Span) -> F.Formula:
+        d = self.formula_decls.get(name)
+        if d is None or d.kind != "assert":
+            raise EvalError(error("E0601", f"undefined assert '{name}'", span))
+        if name in stack:
+            raise EvalError(error("E0602", f"assert '{name}' refers to itself", span))
+        vals = {p.name: evaluate(p.default, self.env()) for p in d.params}
+        for p, a in zip(d.params, args, strict=False):
+            vals[p.name] = evaluate(a, env)
+        return self.formula(d.formula, self.env().with_params(vals), (*stack, name))
+
+    # ------------------------------------------------------------------ controller specs
+    def _specs(self, diags: list[Diagnostic]) -> None:
+        for name, d in self.spec_decls.items():
+            fields: dict[str, tuple[str, ...]] = {}
+            controllable: frozenset[str] = frozenset()
+            marking: frozenset[str] | None = None
+            flags: set[str] = set()
+            try:
+                for it in d.items:
+                    if it.key in ("safety", "assumption", "liveness", "failure", "buchi",
+                                  "concurrencyFluents", "activityFluents"):
+                        fields[it.key] = fields.get(it.key, ()) + it.names
+                        for n in it.names:
+                            if not self._spec_name_ok(it.key, n):
+                                diags.append(error("E0701", f"controllerSpec {name}: '{n}' in "
+                                                   f"{it.key} is not defined", it.span))
+                    elif it.key == "controllable" and it.labels is not None:
+                        controllable = frozenset(expand_set(it.labels, self.env()))
+                    elif it.key == "marking" and it.labels is not None:
+                        marking = frozenset(expand_set(it.labels, self.env()))
+                    elif it.key in ("lazyness", "test_latency", "disturbances"):
+                        diags.append(warning("W0702", f"controllerSpec field '{it.key}' is "
+                                             "ignored", it.span))
+                    else:
+                        flags.add(it.key)
+            except EvalError as e:
+                diags.append(e.diag)
+            self.specs[name] = ControllerSpec(
+                name, fields.get("safety", ()), fields.get("assumption", ()),
+                fields.get("liveness", ()), fields.get("failure", ()), controllable, marking,
+                frozenset(flags), d.span)
+
+    def _spec_name_ok(self, key: str, n: str) -> bool:
+        if key == "safety":
+            return n in self.processes or n in self.composites or (
+                n in self.formula_decls and self.formula_decls[n].kind != "assert")
+        if key == "liveness" and n in self.fluents:
+            return True
+        return n in self.formula_decls and self.formula_decls[n].kind == "assert"
+
+    # ------------------------------------------------------------------ recursion (static)
+    def _check_recursion(self, diags: list[Diagnostic]) -> None:
+        graph: dict[str, set[str]] = {}
+        for name, d in self.composites.items():
+            refs: set[str] = set()
+            _cb_refs(d.body, refs)
+            graph[name] = {r for r in refs if r in self.composites and r not in self.processes}
+        reported: set[str] = set()
+        for start in self.composites:
+            path = _find_cycle(graph, start)
+            if path and start not in reported:
+                reported.update(path)
+                d = self.composites[start]
+                diags.append(error("E0401", "recursive expression while parallel composing: "
+                                   + " -> ".join([*path, path[0]]), d.span))
+
+    # ------------------------------------------------------------------ building
+    def build_lts(self, name: str) -> tuple[LTS | None, list[Diagnostic]]:
+        key = "<top>" + name  # top-level names prefer composites; `get` prefers processes
+        if key in self.cache:
+            return self.cache[key]
+        diags: list[Diagnostic] = []
+        try:
+            lts = self._build(name, (), Span("<command line>", 0, 0), diags,
+                              prefer_composite=True)
+        except EvalError as e:
+            diags.append(e.diag)
+            lts = None
+        result = (lts, diags)
+        self.cache[key] = result
+        return result
+
+    def get(self, name: str, args: tuple[Value, ...], span: Span,
+            diags: list[Diagnostic]) -> LTS | None:
+        """Instance of a process/composite/safety formula by name (cached)."""
+        key = _instance_name(name, args)
+        if key in self.cache:
+            lts, ds = self.cache[key]
+            diags.extend(d for d in ds if d not in diags)
+            return lts
+        local: list[Diagnostic] = []
+        try:
+            lts = self._build(name, args, span, local)
+        except EvalError as e:
+            local.append(e.diag)
+            lts = None
+        self.cache[key] = (lts, local)
+        diags.extend(local)
+        return lts
+
+    def _params(self, params: tuple[S.Param, ...], args: tuple[Value, ...], name: str,
+                span: Span) -> dict[str, Value]:
+        if len(args) > len(params):
+            raise EvalError(error("E0102", f"'{name}' takes {len(params)} parameters, "
+                                  f"{len(args)} given", span))
+        vals = {p.name: evaluate(p.default, self.env()) for p in params}
+        for p, a in zip(params, args, strict=False):
+            vals[p.name] = a
+        return vals
+
+    def _build(self, name: str, args: tuple[Value, ...], span: Span,
+               diags: list[Diagnostic], prefer_composite: bool = False) -> LTS | None:
+        inst = _instance_name(name, args)
+        if name in self.processes and not (prefer_composite and name in self.composites):
+            d = self.processes[name]
+            env = self.env().with_params(self._params(d.params, args, name, span))
+            raw = build_process(d, env, inst, lambda n, a, sp: self.get(n, a, sp, diags), diags)
+            if raw is None:
+                return None
+            return self._apply_tails(raw, d.tails, d.keywords, env, diags, d.span, process=True)
+        if name in self.composites:
+            if name in self.building:
+                raise EvalError(error("E0401", "recursive expression while parallel composing: "
+                                      + " -> ".join([*self.building, name]), span))
+            self.building.append(name)
+            try:
+                return self._composite(self.composites[name], args, inst, diags)
+            finally:
+                self.building.pop()
+        if name in self.formula_decls and self.formula_decls[name].kind != "assert":
+            return self._safety_formula(name, span, diags)
+        raise EvalError(error("E0102", f"undefined process or composite '{name}'", span))
+
+    def _safety_formula(self, name: str, span: Span, diags: list[Diagnostic]) -> LTS | None:
+        nf = self.formulas.get(name)
+        if nf is None:
+            if name in self.formula_errors:
+                diags.append(self.formula_errors[name])
+            return None
+        try:
+            mod = importlib.import_module("iterplan_compiler.fltl.safety")
+            safety_lts = mod.safety_lts
+        except (ImportError, AttributeError):
+            diags.append(error("E0900", f"{nf.kind} {name} needs the FLTL safety translation "
+                               "(iterplan_compiler.fltl.safety), which is not available", span))
+            return None
+        lts, ds = safety_lts(nf, self.fluents, constraint=nf.kind == "constraint")
+        diags.extend(ds)
+        return None if lts is None else renamed(lts, name)
+
+    def _composite(self, d: S.CompositeDecl, args: tuple[Value, ...], inst: str,
+                   diags: list[Diagnostic]) -> LTS | None:
+        env = self.env().with_params(self._params(d.params, args, d.name, d.span))
+        kws = set(d.keywords)
+        if kws & UNSUPPORTED_AT_BUILD:
+            bad = " ".join(sorted(kws & UNSUPPORTED_AT_BUILD))
+            diags.append(error("E0150", f"unsupported construct: operator '{bad}'", d.span))
+            return None
+        if kws & SYNTHESIS_KEYWORDS:
+            return self._synthesised(d, inst, diags)
+        machines = self._cbody(d.body, env, diags)
+        if machines is None:
+            return None
+        return self._compose_and_finish(machines, d, env, inst, diags)
+
+    def _compose_and_finish(self, machines: list[LTS], d: S.CompositeDecl, env: Env, inst: str,
+                            diags: list[Diagnostic]) -> LTS | None:
+        from iterplan_compiler.ir.compose import StateExplosion, compose
+
+        prio = None
+        for t in d.tails:
+            if t.kind in ("high", "low") and t.labels is not None:
+                prio = (expand_set(t.labels, env), t.kind == "high")
+        try:
+            lts = compose(machines, inst, prio, max_states=MAX_STATES)
+        except StateExplosion as e:
+            diags.append(error("E0402", f"composing {inst}: {e}", d.span))
+            return None
+        return self._apply_tails(lts, d.tails, d.keywords, env, diags, d.span, process=False)
+
+    def _apply_tails(self, lts: LTS, tails: tuple[S.Tail, ...], keywords: tuple[str, ...],
+                     env: Env, diags: list[Diagnostic], span: Span, *, process: bool) -> LTS | None:
+        from iterplan_compiler.ir import alphabet_ops as ops
+        from iterplan_compiler.ir import minimise as mn
+
+        for t in tails:
+            if t.kind == "extend" and t.labels is not None:
+                lts = ops.extend_alphabet(lts, expand_set(t.labels, env))
+        for t in tails:
+            if t.kind == "relabel":
+                lts = relabel(lts, expand_relabels(t.relabels, env))
+        for t in tails:
+            if t.kind == "hide" and t.labels is not None:
+                lts = ops.hide(lts, expand_set(t.labels, env))
+            elif t.kind == "expose" and t.labels is not None:
+                lts = ops.expose(lts, expand_set(t.labels, env))
+        kws = set(keywords)
+        name = lts.name
+        try:
+            if "property" in kws and not process:
+                lts = mn.deterministic(lts, name)
+            if "property" in kws:
+                err = None
+                for t in tails:
+                    if t.kind == "error_set" and t.labels is not None:
+                        err = expand_set(t.labels, env)
+                lts = ops.property_complete(lts, err)
+            lts = reachable(lts)
+            if "deterministic" in kws:
+                lts = mn.deterministic(lts, name)
+            if "minimal" in kws:
+                lts = mn.weak_minimise(lts, name)
+        except ValueError as e:  # NotDeterministic and friends
+            diags.append(error("E0403", str(e), span))
+            return None
+        return lts
+
+    def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic]) -> list[LTS] | None:
+        if isinstance(b, S.CRef):
+            args = tuple(evaluate(a, env) for a in b.args)
+            lts = self.get(b.name, args, b.span, diags)
+            return None if lts is None else [lts]
+        if isinstance(b, S.CPar):
+            out: list[LTS] = []
+            for it in b.items:
+                sub = self._cbody(it, env, diags)
+                if sub is None:
+                    return None
+                out.extend(sub)
+            return out
+        if isinstance(b, S.CForall):
+            out = []
+            for e2 in bind_all(b.binds, env):
+                sub = self._cbody(b.body, e2, diags)
+                if sub is None:
+                    return None
+                out.extend(sub)
+            return out
+        if isinstance(b, S.CIf):
+            if truth(evaluate(b.cond, env), b.span):
+                return self._cbody(b.then, env, diags)
+            return [] if b.other is None else self._cbody(b.other, env, diags)
+        # CItem
+        from iterplan_compiler.ir import alphabet_ops as ops
+
+        base = self._cbody(b.prim, env, diags)
+        if base is None:
+            return None
+        machines = base
+        for pre in reversed(b.prefixes):
+            labels = expand_label(pre.label, env)
+            if pre.share:
+                machines = [ops.share_labels(m, labels) for m in machines]
+            else:
+                machines = [renamed(ops.prefix_labels(m, lab), f"{lab}:{m.name}")
+                            for lab in labels for m in machines]
+        if b.relabels is not None:
+            mapping = expand_relabels(b.relabels, env)
+            machines = [relabel(m, mapping) for m in machines]
+        return machines
+
+    # ------------------------------------------------------------------ synthesis
+    def _spec_of(self, d: S.CompositeDecl) -> str | None:
+        for t in d.tails:
+            if t.kind == "spec":
+                return t.name
+        return None
+
+    def controllable(self, name: str) -> frozenset[str]:
+        d = self.composites.get(name)
+        spec = self._spec_of(d) if d else None
+        if spec and spec in self.specs:
+            return self.specs[spec].controllable
+        return frozenset()
+
+    def synthesis_problem(self, name: str) -> tuple[SynthesisProblem | None, list[Diagnostic]]:
+        diags: list[Diagnostic] = []
+        try:
+            return self._problem(name, diags), diags
+        except EvalError as e:
+            diags.append(e.diag)
+            return None, diags
+
+    def _problem(self, name: str, diags: list[Diagnostic]) -> SynthesisProblem | None:
+        d = self.composites.get(name)
+        if d is None:
+            diags.append(error("E0102", f"undefined composite '{name}'", Span("<input>", 0, 0)))
+            return None
+        spec_name = self._spec_of(d)
+        if spec_name is None or spec_name not in self.specs:
+            diags.append(error("E0701", f"composite {name} has no controllerSpec "
+                               f"(~{{{spec_name or 'G'}}})", d.span))
+            return None
+        spec = self.specs[spec_name]
+        env = self.env()
+        plant = self._cbody(d.body, env, diags)
+        if plant is None:
+            return None
+        safety: list[LTS] = []
+        for n in spec.safety:
+            lts = self.get(n, (), spec.span, diags)
+            if lts is None:
+                return None
+            from iterplan_compiler.ir import alphabet_ops as ops
+            acc = [a for a in lts.alphabet if a.startswith("@")]
+            safety.append(ops.hide(lts, acc) if acc else lts)
+
+        def goal(n: str, allow_fluent: bool) -> F.Formula:
+            if allow_fluent and n in self.fluents:
+                return F.FluentProp(n)
+            if n in self.formulas:
+                return self.formulas[n].formula
+            if n in self.formula_errors:
+                raise EvalError(self.formula_errors[n])
+            raise EvalError(error("E0701", f"controllerSpec {spec.name}: undefined '{n}'",
+                                  spec.span))
+
+        assumptions = tuple(goal(n, False) for n in spec.assumptions)
+        guarantees = tuple(goal(n, True) for n in spec.liveness)
+        failures = tuple(goal(n, False) for n in spec.failures)
+        used: set[str] = set()
+        for f in (*assumptions, *guarantees, *failures):
+            _fluents_in(f, used)
+        return SynthesisProblem(
+            name=name, keywords=frozenset(d.keywords), plant=tuple(plant),
+            safety=tuple(safety), assumptions=assumptions, guarantees=guarantees,
+            failures=failures, fluents=tuple(self.fluents[u] for u in sorted(used)),
+            controllable=spec.controllable, marking=spec.marking, nonblocking=spec.nonblocking,
+            spec_name=spec.name, span=d.span)
+
+    def _synthesised(self, d: S.CompositeDecl, inst: str, diags: list[Diagnostic]) -> LTS | None:
+        problem = self._problem(d.name, diags)
+        if problem is None:
+            return None
+        try:
+            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
+            synthesize = driver.synthesize
+        except (ImportError, AttributeError):
+            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
+                               "available in this build", d.span))
+            return None
+        try:
+            result = synthesize(problem)
+        except Exception as e:  # a synthesis bug must not look like a front-end crash
+            diags.append(error("E0901", f"synthesis of {d.name} failed: {e}", d.span))
+            return None
+        if not result.realizable:
+            diags.append(error("E0901", f"{d.name}: no controller exists (unrealizable)"
+                               + (f": {result.explanation}" if result.explanation else ""),
+                               d.span))
+            return None
+        lts = result.composition if result.composition is not None else result.controller
+        if lts is None:
+            return None
+        return renamed(lts, inst)
+
+
+def _fold(cls: type, parts: list[F.Formula], conj: bool) -> F.Formula:
+    if not parts:
+        return F.Const(conj)
+    out = parts[0]
+    for p in parts[1:]:
+        out = cls(out, p)
+    return out
+
+
+def _fluents_in(f: F.Formula, out: set[str]) -> None:
+    if isinstance(f, F.FluentProp):
+        out.add(f.name)
+    for attr in ("arg", "left", "right"):
+        sub = getattr(f, attr, None)
+        if isinstance(sub, F.Formula):
+            _fluents_in(sub, out)
+
+
+def _cb_refs(b: S.CBody, out: set[str]) -> None:
+    if isinstance(b, S.CRef):
+        out.add(b.name)
+    elif isinstance(b, S.CPar):
+        for it in b.items:
+            _cb_refs(it, out)
+    elif isinstance(b, S.CForall):
+        _cb_refs(b.body, out)
+    elif isinstance(b, S.CIf):
+        _cb_refs(b.then, out)
+        if b.other is not None:
+            _cb_refs(b.other, out)
+    elif isinstance(b, S.CItem):
+        _cb_refs(b.prim, out)
+
+
+def _find_cycle(graph: dict[str, set[str]], start: str) -> list[str] | None:
+    """A cycle through ``start`` (as a path starting at ``start``), or None."""
+    stack = [(start, [start])]
+    seen: set[str] = set()
+    while stack:
+        node, path = stack.pop()
+        for nxt in sorted(graph.get(node, ())):
+            if nxt == start:
+                return path
+            if nxt not in seen:
+                seen.add(nxt)
+                stack.append((nxt, [*path, nxt]))
+    return None
+
+
+def elaborate(spec: S.SpecFile, text: str, sources: dict[str, str] | None = None
+              ) -> tuple[Model, list[Diagnostic]]:
+    """Build the :class:`Model` of a parsed file (LTSs are built lazily)."""
+    diags: list[Diagnostic] = []
+    el = Elaborator(spec, diags)
+    consts: dict[str, object] = {k: (float(v) if isinstance(v, Fraction) else v)
+                                 for k, v in el.consts.items()}
+    model = Model(
+        source_path=spec.path, source_text=text,
+        processes=tuple(el.processes), composites=tuple(el.composites),
+        composite_keywords={n: frozenset(d.keywords) for n, d in el.composites.items()},
+        fluents=el.fluents, formulas=el.formulas, controller_specs=el.specs,
+        constants=consts, ranges=el.ranges, sets=el.sets, backend=el,
+        sources=dict(sources or {spec.path: text}))
+    return model, diags
+
+
+__all__ = ["Elaborator", "elaborate", "relabel", "expand_label_env"]

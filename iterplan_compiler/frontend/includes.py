@@ -1,0 +1,54 @@
+"""``include "file.lts"`` (iterplan extension): textual inclusion of reusable fragments.
+
+The path is resolved relative to the including file, then in the bundled ``stdlib/``
+(package ``iterplan_compiler.stdlib``).  Included declarations are spliced in at the include
+position.  Codes: E0801 file not found, E0802 include cycle.
+"""
+
+from __future__ import annotations
+
+import importlib.resources
+from pathlib import Path
+
+from iterplan_compiler.diagnostics import Diagnostic, error
+from iterplan_compiler.frontend import syntax as S
+from iterplan_compiler.frontend.parse import parse_text
+
+
+def _resolve(name: str, including: str) -> tuple[str, str] | None:
+    """Return (display path, text) of an included file, or None."""
+    base = Path(including).parent if including and not including.startswith("<") else Path(".")
+    cand = base / name
+    if cand.is_file():
+        return str(cand), cand.read_text(encoding="utf-8", errors="replace")
+    res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
+    if res.is_file():
+        return f"<stdlib>/{name}", res.read_text(encoding="utf-8")
+    return None
+
+
+def expand_includes(spec: S.SpecFile, sources: dict[str, str], diags: list[Diagnostic],
+                    stack: tuple[str, ...] = ()) -> S.SpecFile:
+    """Replace every :class:`~syntax.IncludeDecl` by the declarations of the included file."""
+    if not any(isinstance(d, S.IncludeDecl) for d in spec.decls):
+        return spec
+    out: list[S.Decl] = []
+    for d in spec.decls:
+        if not isinstance(d, S.IncludeDecl):
+            out.append(d)
+            continue
+        found = _resolve(d.path, spec.path)
+        if found is None:
+            diags.append(error("E0801", f"included file '{d.path}' not found (searched next to "
+                               "the including file and in the bundled stdlib)", d.span))
+            continue
+        path, text = found
+        if path in stack or path == spec.path:
+            diags.append(error("E0802", f"include cycle: '{d.path}' includes itself", d.span))
+            continue
+        sources[path] = text
+        sub, ds = parse_text(text, path)
+        diags.extend(ds)
+        sub = expand_includes(sub, sources, diags, (*stack, spec.path))
+        out.extend(sub.decls)
+    return S.SpecFile(spec.path, tuple(out))

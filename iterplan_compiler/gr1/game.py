@@ -1,0 +1,366 @@
+"""Boolean-variable GR(1) games with slugs semantics, built as BDDs.
+
+A :class:`Game` is built from a :class:`~iterplan_compiler.gr1.slugsin.SlugsSpec` into a
+caller-supplied ``dd`` manager (never a module-global one).  Semantics (slugs, Ehlers &
+Raman CAV'16):
+
+* variables: inputs ``x`` (environment) and outputs ``y`` (system), each with a primed copy;
+* the system is *Mealy*: it picks ``y'`` after seeing ``x'``;
+* ``ENV_TRANS`` ranges over ``x, y, x'``; ``SYS_TRANS`` over ``x, y, x', y'``;
+* liveness lines may mention primed variables (transition-based justice);
+* initial condition ``∀x. θe → ∃y. θs ∧ Win``.
+
+Design choices (all measurable, see ``docs/gr1.md``):
+
+* **Variable order** — ``"interleaved"`` (default; slugs' choice: each bit next to its
+  primed copy, in declaration order) or ``"blocked"`` (gr1c's: all current bits, then all
+  primed bits).  ``group_pairs`` ties each ``(v, v')`` pair into a CUDD reordering group so
+  sifting moves them together (Spectra's "reorder with grouping").
+* **Partitioned transition relations** — every TRANS line is one conjunct; consecutive
+  conjuncts are clustered up to ``cluster_nodes`` BDD nodes and each cluster carries the
+  primed variables that no later cluster mentions, so the controllable predecessor
+  quantifies them as early as possible (fused ``and_exists`` / ``or_forall`` of CUDD).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from iterplan_compiler.diagnostics import Diagnostic, error
+from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec, variables_of
+
+Node = Any
+
+try:  # the fused operators exist only in the CUDD bindings
+    from dd.cudd import and_exists as _cudd_and_exists
+    from dd.cudd import or_forall as _cudd_or_forall
+except ImportError:  # pragma: no cover - exercised only without dd.cudd
+    _cudd_and_exists = None
+    _cudd_or_forall = None
+
+
+def prime_name(name: str) -> str:
+    """Name of the primed (next-state) BDD variable of ``name``."""
+    return name + "'"
+
+
+@dataclass(frozen=True)
+class GameOptions:
+    """How to build the BDDs of a game.
+
+    ``order``: ``"interleaved"`` or ``"blocked"``; ``group_pairs``: CUDD reordering groups
+    for ``(v, v')`` (interleaved order only); ``reordering``: CUDD dynamic reordering (group
+    sifting, the only method dd exposes); ``max_growth``: CUDD's sifting growth bound;
+    ``partition``: keep the transition relations as quantification-scheduled clusters
+    (otherwise one monolithic BDD per player); ``cluster_nodes``: cluster size bound.
+    """
+
+    order: str = "interleaved"
+    group_pairs: bool = False
+    reordering: bool = True
+    max_growth: float | None = None
+    partition: bool = True
+    cluster_nodes: int = 5000
+
+
+@dataclass
+class Part:
+    """One cluster of a partitioned transition relation and the primed variables that may be
+    quantified right after conjoining it (no later cluster mentions them)."""
+
+    bdd: Node
+    qvars: frozenset[str]
+
+
+@dataclass
+class Game:
+    """A GR(1) game over Boolean variables (see the module docstring for the semantics)."""
+
+    bdd: Any
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    env_init: Node
+    sys_init: Node
+    env_trans_lines: list[Node]
+    sys_trans_lines: list[Node]
+    env_parts: list[Part]
+    sys_parts: list[Part]
+    env_pre_q: frozenset[str]
+    sys_pre_q: frozenset[str]
+    env_live: list[Node]
+    sys_live: list[Node]
+    live_primed: bool
+    options: GameOptions
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    _mono: dict[str, Node] = field(default_factory=dict)
+
+    @property
+    def env_trans(self) -> Node:
+        """Monolithic ``ρe`` (built on first use; partitioned runs may never need it)."""
+        if "env" not in self._mono:
+            self._mono["env"] = _all_of(self.bdd, self.env_trans_lines)
+        return self._mono["env"]
+
+    @property
+    def sys_trans(self) -> Node:
+        """Monolithic ``ρs`` (built on first use)."""
+        if "sys" not in self._mono:
+            self._mono["sys"] = _all_of(self.bdd, self.sys_trans_lines)
+        return self._mono["sys"]
+
+    # --- variable sets -------------------------------------------------------------------
+    @property
+    def x(self) -> tuple[str, ...]:
+        return self.inputs
+
+    @property
+    def y(self) -> tuple[str, ...]:
+        return self.outputs
+
+    @property
+    def xp(self) -> tuple[str, ...]:
+        return tuple(prime_name(v) for v in self.inputs)
+
+    @property
+    def yp(self) -> tuple[str, ...]:
+        return tuple(prime_name(v) for v in self.outputs)
+
+    # --- operators -------------------------------------------------------------------------
+    def prime(self, u: Node) -> Node:
+        """Rename a *state* predicate (current variables only) to the next-state copy."""
+        names = self.inputs + self.outputs
+        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
+            # CUDD's variable swap is much cheaper than vector composition; it is exact
+            # because ``u`` mentions no primed variable.
+            return self.bdd._swap(u, {v: prime_name(v) for v in names})
+        return self.bdd.let({v: self.bdd.var(prime_name(v)) for v in names}, u)
+
+    def and_exists(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+        """``∃ qvars. u ∧ v`` (fused in CUDD)."""
+        q = set(qvars)
+        if not q:
+            return u & v
+        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
+            return _cudd_and_exists(u, v, q)
+        return self.bdd.exist(q, u & v)
+
+    def or_forall(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+        """``∀ qvars. u ∨ v`` (fused in CUDD)."""
+        q = set(qvars)
+        if not q:
+            return u | v
+        if _cudd_or_forall is not None and hasattr(self.bdd, "_swap"):
+            return _cudd_or_forall(u, v, q)
+        return self.bdd.forall(q, u | v)
+
+    def cpre_trans(self, target: Node) -> Node:
+        """Mealy controllable predecessor of a transition-level target.
+
+        ``∀x'. (ρe → ∃y'. (ρs ∧ target))``: the current states from which, for every legal
+        next input, the system has a legal next output such that the transition satisfies
+        ``target`` (which may mention current and next variables).
+        """
+        if self.options.partition:
+            s = target
+            if self.sys_pre_q:
+                s = self.bdd.exist(set(self.sys_pre_q), s)
+            for p in self.sys_parts:
+                s = self.and_exists(s, p.bdd, p.qvars)
+            if self.env_pre_q:
+                s = self.bdd.forall(set(self.env_pre_q), s)
+            for p in self.env_parts:
+                s = self.or_forall(~p.bdd, s, p.qvars)
+            return s
+        s = self.and_exists(self.sys_trans, target, self.yp)
+        return self.or_forall(~self.env_trans, s, self.xp)
+
+    def cpre(self, states: Node) -> Node:
+        """Controllable predecessor of a *state* set (``cpre_trans`` of its primed copy)."""
+        return self.cpre_trans(self.prime(states))
+
+    def initial_ok(self, win: Node) -> bool:
+        """slugs' initial condition ``∀x. θe → ∃y. (θs ∧ win)`` (free leftovers universal)."""
+        bdd = self.bdd
+        inner = bdd.exist(set(self.outputs), self.sys_init & win)
+        u = self.or_forall(~self.env_init, inner, self.inputs)
+        rest = bdd.support(u)
+        if rest:
+            u = bdd.forall(rest, u)
+        return u == bdd.true
+
+    def node_count(self, nodes: Sequence[Node]) -> int:
+        """Shared DAG size of ``nodes`` (dd.cudd), else the sum of sizes."""
+        try:
+            from dd.cudd import count_nodes
+
+            return int(count_nodes(list(nodes)))
+        except Exception:  # autoref or empty list
+            return sum(len(n) for n in nodes)
+
+
+def _all_of(bdd: Any, us: Sequence[Node]) -> Node:
+    r = bdd.true
+    for u in us:
+        r &= u
+    return r
+
+
+# --- building ----------------------------------------------------------------------------
+
+
+def _build_expr(bdd: Any, expr: Expr, memo: dict[int, Node]) -> Node:
+    """BDD of ``expr``; iterative post-order (prefix formulas can nest very deeply) with a
+    memo keyed by node identity so ``$``/``?`` shared sub-formulas are built once."""
+    stack: list[tuple[Expr, bool]] = [(expr, False)]
+    while stack:
+        e, done = stack.pop()
+        key = id(e)
+        if key in memo:
+            continue
+        if e.op == "const":
+            memo[key] = bdd.true if e.value else bdd.false
+        elif e.op == "var":
+            memo[key] = bdd.var(prime_name(e.name) if e.primed else e.name)
+        elif not done:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if id(a) not in memo)
+        else:
+            vals = [memo[id(a)] for a in e.args]
+            if e.op == "not":
+                memo[key] = ~vals[0]
+            elif e.op == "and":
+                memo[key] = vals[0] & vals[1]
+            elif e.op == "or":
+                memo[key] = vals[0] | vals[1]
+            else:  # xor
+                memo[key] = ~vals[0].equiv(vals[1])
+    return memo[id(expr)]
+
+
+def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
+    if options.order == "blocked":
+        bdd.declare(*names)
+        bdd.declare(*(prime_name(v) for v in names))
+        return
+    for v in names:
+        bdd.declare(v, prime_name(v))
+    if options.group_pairs and hasattr(bdd, "group"):
+        bdd.group({v: 2 for v in names})
+
+
+def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int,
+              support_of) -> tuple[list[Part], frozenset[str]]:
+    """Cluster ``parts`` (in order) up to ``limit`` nodes; attach early-quantifiable vars."""
+    clusters: list[Node] = []
+    cur = None
+    for p in parts:
+        if p == game_bdd.true:
+            continue
+        if cur is None:
+            cur = p
+            continue
+        cand = cur & p
+        if len(cand) <= limit:
+            cur = cand
+        else:
+            clusters.append(cur)
+            cur = p
+    if cur is not None:
+        clusters.append(cur)
+    q = set(qvars)
+    supports = [support_of(c) & q for c in clusters]
+    mentioned = set().union(*supports) if supports else set()
+    pre_q = frozenset(q - mentioned)
+    out: list[Part] = []
+    later: set[str] = set()
+    last_q: list[frozenset[str]] = [frozenset()] * len(clusters)
+    for k in range(len(clusters) - 1, -1, -1):
+        last_q[k] = frozenset(supports[k] - later)
+        later |= supports[k]
+    for c, lq in zip(clusters, last_q, strict=True):
+        out.append(Part(c, lq))
+    return out, pre_q
+
+
+def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
+               ) -> tuple[Game | None, list[Diagnostic]]:
+    """Build the BDDs of ``spec`` into the (fresh) manager ``bdd``.
+
+    Diagnostics: ``G201`` primed variable in an INIT section, ``G202`` ENV_TRANS mentions a
+    primed output (the environment cannot see the system's next move in slugs semantics).
+    """
+    options = options or GameOptions()
+    diags: list[Diagnostic] = []
+    for sec in ("ENV_INIT", "SYS_INIT"):
+        for line in spec.lines(sec):
+            if any(p for _, p in variables_of(line.expr)):
+                diags.append(error("G201", f"[{sec}] formulas may not mention primed "
+                                   "variables", line.span))
+    outs = set(spec.outputs)
+    for line in spec.lines("ENV_TRANS"):
+        bad = sorted(prime_name(n) for n, p in variables_of(line.expr) if p and n in outs)
+        if bad:
+            diags.append(error("G202", "[ENV_TRANS] may not mention next-state outputs "
+                               f"({', '.join(bad)})", line.span))
+    if diags:
+        return None, diags
+
+    cfg: dict[str, Any] = {"reordering": options.reordering}
+    if options.max_growth is not None:
+        cfg["max_growth"] = options.max_growth
+    bdd.configure(**cfg)
+    _declare(bdd, list(spec.inputs) + list(spec.outputs), options)
+
+    memo: dict[int, Node] = {}
+
+    def conj(sec: str) -> list[Node]:
+        return [_build_expr(bdd, line.expr, memo) for line in spec.lines(sec)]
+
+    env_init_l, sys_init_l = conj("ENV_INIT"), conj("SYS_INIT")
+    env_trans_l, sys_trans_l = conj("ENV_TRANS"), conj("SYS_TRANS")
+    env_live = conj("ENV_LIVENESS") or [bdd.true]
+    sys_live = conj("SYS_LIVENESS") or [bdd.true]
+    memo.clear()  # drop references to intermediate sub-formulas
+
+    def support_of(u: Node) -> set[str]:
+        return set(bdd.support(u))
+
+    xp = [prime_name(v) for v in spec.inputs]
+    yp = [prime_name(v) for v in spec.outputs]
+    if options.partition:
+        env_parts, env_pre = _schedule(bdd, env_trans_l, xp, options.cluster_nodes, support_of)
+        sys_parts, sys_pre = _schedule(bdd, sys_trans_l, yp, options.cluster_nodes, support_of)
+    else:
+        env_parts, env_pre, sys_parts, sys_pre = [], frozenset(), [], frozenset()
+    primed = set(xp) | set(yp)
+    live_primed = any(support_of(u) & primed for u in env_live + sys_live)
+    game = Game(
+        bdd=bdd,
+        inputs=tuple(spec.inputs),
+        outputs=tuple(spec.outputs),
+        env_init=_all_of(bdd, env_init_l),
+        sys_init=_all_of(bdd, sys_init_l),
+        env_trans_lines=env_trans_l,
+        sys_trans_lines=sys_trans_l,
+        env_parts=env_parts,
+        sys_parts=sys_parts,
+        env_pre_q=env_pre,
+        sys_pre_q=sys_pre,
+        env_live=env_live,
+        sys_live=sys_live,
+        live_primed=live_primed,
+        options=options,
+    )
+    game.stats.update(
+        env_trans_nodes=game.node_count([p.bdd for p in env_parts]) if env_parts
+        else len(game.env_trans),
+        sys_trans_nodes=game.node_count([p.bdd for p in sys_parts]) if sys_parts
+        else len(game.sys_trans),
+        env_clusters=len(env_parts),
+        sys_clusters=len(sys_parts),
+        variables=2 * (len(spec.inputs) + len(spec.outputs)),
+    )
+    return game, diags

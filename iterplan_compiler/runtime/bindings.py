@@ -1,0 +1,221 @@
+"""Action bindings: what each controllable label *does* on the aircraft, and which uncontrollable
+label answers it.
+
+Labels are matched in a canonical form (lower case, ``_`` -> ``.``, a trailing ``?`` dropped), so
+``has.next``, ``has_next`` and ``has.next?`` all bind the same way; answers are mapped back to the
+exact spelling in the controller's alphabet.  Standard bindings (paper §III-B, §IV):
+
+===================================  ==============================================================
+controllable (canonical)             effect -> answer
+===================================  ==============================================================
+``has.next``                         ``y.next`` / ``yes.next`` if the iterator's n is not null,
+                                     else ``n.next`` / ``no.next``
+``remove.next``                      iterator ``remove_next`` (no answer)
+``reset`` / ``reset.iterator``       iterator ``reset`` from the current (predicted) pose
+``go.next``                          motion planner flies to n; ``arrived`` when the planner
+                                     counts the cell as visited (durative)
+``is.next.X`` / ``next.X``           sensor X about the iterator's n -> ``yes.next.X`` /
+                                     ``no.next.X``
+``is.X`` / ``X``                     sensor X about the current location (the cell of the last
+                                     arrival) -> ``yes.X`` / ``no.X``
+``take.photo`` / ``photo``           records a photo (time, pose, cell)
+``takeoff`` / ``land``               vehicle take-off / landing; answered by ``takeoff.ended`` /
+                                     ``takeoff.complete`` / ``landed`` when the vehicle reports
+anything else                        instantaneous: logged, no answer
+===================================  ==============================================================
+
+Sensor cell sets come from the map (``GridMap.sensors``).  Users extend or override with
+:meth:`Bindings.bind` (any canonical label) and :meth:`Bindings.sensor` (a predicate over cell ids).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from iterplan_compiler.runtime.executor import MissionContext
+
+
+def canon(label: str) -> str:
+    """Canonical form used for matching labels to bindings."""
+    return label.strip().lower().rstrip("?").replace("_", ".")
+
+
+class BindingError(ValueError):
+    """The controller uses a label the runtime cannot serve (message is for the user)."""
+
+
+#: A handler runs after the controller took ``label``; it returns canonical answer label(s).
+Handler = Callable[["MissionContext", str], "str | Iterable[str] | None"]
+
+YES_NEXT = ("y.next", "yes.next")
+NO_NEXT = ("n.next", "no.next")
+ARRIVED = ("arrived",)
+TAKEOFF_DONE = ("takeoff.ended", "takeoff.complete", "takeoff.done")
+LANDED = ("landed",)
+
+
+@dataclass
+class Binding:
+    """A resolved binding: the handler and, for durative actions, which vehicle/planner event
+    completes it (``"arrived"``, ``"takeoff_complete"``, ``"landed"``) and the answer label."""
+
+    kind: str
+    handler: Handler
+    completes_on: str | None = None
+    answer: str | None = None
+
+
+@dataclass
+class Bindings:
+    """Registry of handlers and sensors; :meth:`resolve` builds the per-label table."""
+
+    custom: dict[str, Handler] = field(default_factory=dict)
+    sensors: dict[str, Callable[[int], bool]] = field(default_factory=dict)
+
+    def bind(self, label: str, handler: Handler) -> Bindings:
+        """Override/add the handler of a controllable label (any spelling)."""
+        self.custom[canon(label)] = handler
+        return self
+
+    def sensor(self, name: str, predicate: Callable[[int], bool]) -> Bindings:
+        """Sensor ``name`` answers yes for the cells where ``predicate(cell_id)`` holds."""
+        self.sensors[name.lower()] = predicate
+        return self
+
+    # -- resolution ---------------------------------------------------------------------------
+    def resolve(self, controllable: Iterable[str], uncontrollable: Iterable[str],
+                map_sensors: dict[str, np.ndarray], num_cells: int) -> dict[str, Binding]:
+        """One :class:`Binding` per controllable label, or :class:`BindingError`."""
+        unc = {canon(u): u for u in uncontrollable}
+        sensor_names = {k.lower(): k for k in map_sensors}
+        out: dict[str, Binding] = {}
+
+        def answer(options: tuple[str, ...]) -> str | None:
+            return next((o for o in options if o in unc), None)
+
+        def sensor_pred(name: str, label: str) -> Callable[[int], bool]:
+            key = name.lower()
+            if key in self.sensors:
+                return self.sensors[key]
+            if key in sensor_names:
+                mask = np.zeros(num_cells, dtype=bool)
+                mask[map_sensors[sensor_names[key]]] = True
+                return lambda cell: bool(mask[cell])
+            raise BindingError(
+                f"controller action {label!r} queries sensor {name!r}, but the map defines no "
+                f"cells for it (map sensors: {', '.join(sorted(map_sensors)) or 'none'})")
+
+        for label in sorted(controllable):
+            c = canon(label)
+            if c in self.custom:
+                out[label] = Binding("custom", self.custom[c])
+                continue
+            if c == "has.next":
+                y, n = answer(YES_NEXT), answer(NO_NEXT)
+                if y is None or n is None:
+                    raise BindingError(f"{label!r} needs answers y.next/n.next in the alphabet")
+                out[label] = Binding("has.next", _has_next(unc[y], unc[n]))
+            elif c == "remove.next":
+                out[label] = Binding("remove.next", _remove_next)
+            elif c in ("reset", "reset.iterator"):
+                out[label] = Binding("reset", _reset)
+            elif c == "go.next":
+                a = answer(ARRIVED)
+                if a is None:
+                    raise BindingError(f"{label!r} needs the answer 'arrived' in the alphabet")
+                out[label] = Binding("go.next", _go_next, "arrived", unc[a])
+            elif c in ("take.photo", "photo"):
+                out[label] = Binding("photo", _photo)
+            elif c == "takeoff":
+                a = answer(TAKEOFF_DONE)
+                out[label] = Binding("takeoff", _takeoff, "takeoff_complete",
+                                     unc[a] if a else None)
+            elif c == "land":
+                a = answer(LANDED)
+                out[label] = Binding("land", _land, "landed", unc[a] if a else None)
+            elif (m := re.fullmatch(r"(?:is\.)?next\.(.+)", c)) and (
+                    f"yes.next.{m.group(1)}" in unc and f"no.next.{m.group(1)}" in unc):
+                x = m.group(1)
+                out[label] = Binding("sensor.next", _sensor_next(
+                    sensor_pred(x, label), unc[f"yes.next.{x}"], unc[f"no.next.{x}"]))
+            elif (m := re.fullmatch(r"(?:is\.)?(.+)", c)) and (
+                    f"yes.{m.group(1)}" in unc and f"no.{m.group(1)}" in unc):
+                x = m.group(1)
+                out[label] = Binding("sensor.current", _sensor_current(
+                    sensor_pred(x, label), unc[f"yes.{x}"], unc[f"no.{x}"]))
+            else:
+                out[label] = Binding("instant", _instant)
+        return out
+
+
+# -- standard handlers ------------------------------------------------------------------------
+
+def _has_next(yes: str, no: str) -> Handler:
+    def h(ctx: MissionContext, label: str) -> str:
+        return yes if ctx.iterator.has_next() else no
+    return h
+
+
+def _remove_next(ctx: MissionContext, label: str) -> None:
+    if not ctx.iterator.has_next():
+        raise BindingError("remove.next while the iterator has no next location")
+    ctx.iterator.remove_next()
+
+
+def _reset(ctx: MissionContext, label: str) -> None:
+    ctx.iterator.reset(ctx.predicted_pose())
+
+
+def _go_next(ctx: MissionContext, label: str) -> None:
+    cell = ctx.iterator.next
+    if cell is None:
+        raise BindingError("go.next while the iterator has no next location")
+    ctx.go(cell)
+
+
+def _photo(ctx: MissionContext, label: str) -> None:
+    ctx.record_photo()
+
+
+def _takeoff(ctx: MissionContext, label: str) -> None:
+    ctx.vehicle.arm()
+    ctx.vehicle.takeoff(ctx.altitude)
+
+
+def _land(ctx: MissionContext, label: str) -> None:
+    ctx.vehicle.land()
+
+
+def _instant(ctx: MissionContext, label: str) -> None:
+    ctx.note(f"action {label}")
+
+
+def _sensor_next(pred: Callable[[int], bool], yes: str, no: str) -> Handler:
+    def h(ctx: MissionContext, label: str) -> str:
+        cell = ctx.iterator.next
+        if cell is None:
+            raise BindingError(f"{label}: sensing the next location, but it is null")
+        return yes if pred(cell) else no
+    return h
+
+
+def _sensor_current(pred: Callable[[int], bool], yes: str, no: str) -> Handler:
+    def h(ctx: MissionContext, label: str) -> str:
+        cell = ctx.current_cell()
+        return yes if cell is not None and cell >= 0 and pred(cell) else no
+    return h
+
+
+def answers_of(result: Any) -> list[str]:
+    """Normalise a handler's return value to a list of labels."""
+    if result is None:
+        return []
+    if isinstance(result, str):
+        return [result]
+    return list(result)

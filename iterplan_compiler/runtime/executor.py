@@ -1,0 +1,547 @@
+"""Executor: runs a controller with action bindings against a vehicle.
+
+Loop (one discrete step at a time):
+
+1. a pending uncontrollable answer (``y.next``, ``yes.next.inP``, ``arrived``...) is fed to the
+   controller; a refusal ends the mission safely;
+2. otherwise the controller picks a controllable label (the first of
+   ``Controller.enabled_controllable()`` unless a ``choose`` function is given); the controller
+   takes it and its binding runs, possibly queueing answers or starting a durative action;
+3. otherwise time passes: the vehicle advances by ``tick`` seconds, the motion planner follows its
+   path, and vehicle/planner events become answers (``arrived``, ``takeoff.ended``...).
+
+Time accounting: the aircraft keeps flying while the plan thinks.  The wall time spent in steps 1
+and 2 (controller, iterator, sensors, Sorter) is measured, and — for simulated vehicles — the
+simulation is advanced by it before the next physical tick and before planning a ``go.next``
+(the aircraft holds its last command meanwhile), so a faster-than-real-time run still shows the
+iteration overhead the paper measures.  ``ideal_compute=True`` turns this off (deterministic).
+
+A mission ends when ``passes`` complete iterator passes have been answered (``n.next``), at the
+time limit, or early and *safely* (RTL or loiter, ``end_action``) on a refused event, a
+controller deadlock, a livelock (too many controllable steps without any answer), a planner
+that cannot reach a cell, link loss, or a binding error.  Every event is logged with mission
+time and pose (up to ``log_limit`` entries; counters are always complete).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from iterplan_compiler.runtime.bindings import Binding, BindingError, Bindings, answers_of, canon
+from iterplan_compiler.runtime.controller import Controller, ControllerTable, RefusedEvent
+from iterplan_compiler.runtime.grid import GridMap
+from iterplan_compiler.runtime.iterator import Iterator
+from iterplan_compiler.runtime.planner import MotionPlanner
+from iterplan_compiler.runtime.sorter import Pose, make_sorter
+from iterplan_compiler.runtime.vehicle import Vehicle
+
+
+@dataclass
+class RunConfig:
+    """Mission options (CLI flags of ``iterc run`` map 1:1 onto these)."""
+
+    sorter: str = "distance"
+    seed: int = 0
+    ideal_compute: bool = False
+    passes: int = 1                 # stop after this many complete iterator passes; 0 = never
+    max_time: float = 4 * 3600.0    # mission seconds
+    tick: float = 0.25              # physical time step while waiting (s)
+    altitude: float | None = None   # default: the map's altitude
+    turn_radius: float | None = None   # planning radius; default 1.4 x the vehicle's minimum
+    parallel: bool = True           # arrive parallel to the fixed direction (either way)
+    planner_mode: str = "course"
+    lead: float | None = None
+    accept: float | None = None
+    end_action: str = "rtl"         # what a safe end commands: rtl, loiter or none
+    log_limit: int = 200_000
+    livelock_limit: int = 5_000_000
+    progress: Callable[[str], None] | None = None
+    progress_every: float = 300.0   # mission seconds between progress lines
+    track_every: float = 1.0        # mission seconds between track points
+    choose: Callable[[Sequence[str]], str] | None = None
+    auto_takeoff: bool = True       # take off before starting when the controller has no takeoff
+
+
+@dataclass
+class LogEntry:
+    t: float
+    kind: str          # "c" controllable, "u" uncontrollable, "v" vehicle, "p" planner, "x" note
+    label: str
+    state: int
+    x: float
+    y: float
+    alt: float
+    cell: int = -1
+
+
+@dataclass
+class MissionResult:
+    ok: bool
+    reason: str
+    summary: dict
+    log: list[LogEntry]
+    track: np.ndarray                 # (k, 4): t, x, y, alt
+    photos: list[tuple[float, int, float, float]]
+    arrivals: list[tuple[float, int, float, float]]
+    grid: GridMap
+    counts: dict = field(default_factory=dict)
+
+    # -- outputs ------------------------------------------------------------------------------
+    def write_track_csv(self, path: str | Path) -> None:
+        lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t", "lat", "lon", "alt", "east", "north"])
+            for (t, x, y, a), la, lo in zip(self.track, np.atleast_1d(lat), np.atleast_1d(lon)):
+                w.writerow([f"{t:.2f}", f"{la:.7f}", f"{lo:.7f}", f"{a:.1f}", f"{x:.2f}",
+                            f"{y:.2f}"])
+
+    def write_events_csv(self, path: str | Path) -> None:
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t", "kind", "label", "state", "east", "north", "alt", "cell"])
+            for e in self.log:
+                w.writerow([f"{e.t:.2f}", e.kind, e.label, e.state, f"{e.x:.2f}", f"{e.y:.2f}",
+                            f"{e.alt:.1f}", self.grid.cell_name(e.cell) if e.cell >= 0 else ""])
+
+    def geojson(self) -> dict:
+        """Track as a LineString, arrivals and photos as Points (lon, lat), summary as props."""
+        lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
+        line = [[round(float(a), 7), round(float(b), 7)] for a, b in
+                zip(np.atleast_1d(lon), np.atleast_1d(lat))]
+        feats = [{"type": "Feature", "properties": {"kind": "track", **self.summary},
+                  "geometry": {"type": "LineString", "coordinates": line}}]
+        for kind, rows in (("arrival", self.arrivals), ("photo", self.photos)):
+            for t, cell, x, y in rows:
+                la, lo = self.grid.to_latlon(x, y)
+                feats.append({"type": "Feature",
+                              "properties": {"kind": kind, "t": round(t, 2),
+                                             "cell": self.grid.cell_name(cell)},
+                              "geometry": {"type": "Point",
+                                           "coordinates": [round(lo, 7), round(la, 7)]}})
+        return {"type": "FeatureCollection", "features": feats}
+
+    def write_geojson(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.geojson(), indent=1, sort_keys=True) + "\n")
+
+    def write_summary(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.summary, indent=2, sort_keys=True) + "\n")
+
+    def plot(self, path: str | Path, *, max_cells: int = 200_000) -> None:
+        """PNG of the map (sensor cells shaded), the flown track, arrivals and photos."""
+        import matplotlib  # lazy: the aircraft never needs it
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Rectangle
+
+        g = self.grid
+        fig, ax = plt.subplots(figsize=(8, 8 * g.rows / max(g.cols, 1) + 0.5), dpi=100)
+        colours = ["#f5a623", "#d0021b", "#4a90e2", "#7ed321", "#9013fe"]
+        handles = []
+        for i, (name, ids) in enumerate(sorted(g.sensors.items())):
+            if len(ids) > max_cells:
+                continue
+            xs, ys = g.centres(ids)
+            col = colours[i % len(colours)]
+            for x, y in zip(xs, ys):
+                ax.add_patch(Rectangle((x - g.cell_size / 2, y - g.cell_size / 2), g.cell_size,
+                                       g.cell_size, color=col, alpha=0.35, lw=0))
+            handles.append(Rectangle((0, 0), 1, 1, color=col, alpha=0.35, label=name))
+        ax.plot(self.track[:, 1], self.track[:, 2], "-", color="#333333", lw=0.8, label="track")
+        if self.arrivals:
+            a = np.asarray([(x, y) for _, _, x, y in self.arrivals])
+            ax.plot(a[:, 0], a[:, 1], "o", ms=3, color="#4a90e2", label="arrived")
+        if self.photos:
+            p = np.asarray([(x, y) for _, _, x, y in self.photos])
+            ax.plot(p[:, 0], p[:, 1], "*", ms=9, color="#d0021b", label="photo")
+        ax.plot(*g.home, "k^", ms=8, label="home")
+        ax.set_xlim(-g.cell_size, (g.cols + 1) * g.cell_size)
+        ax.set_ylim(-g.cell_size, (g.rows + 1) * g.cell_size)
+        ax.set_aspect("equal")
+        ax.set_xlabel("east (m)")
+        ax.set_ylabel("north (m)")
+        s = self.summary
+        ax.set_title(f"{g.name}: {s.get('duration_s', 0):.0f} s, {s.get('distance_m', 0):.0f} m, "
+                     f"overhead {s.get('overhead_pct', float('nan')):.0f} %")
+        ax.legend(handles=handles + ax.get_legend_handles_labels()[0], loc="upper right",
+                  fontsize=7)
+        fig.tight_layout()
+        fig.savefig(path)
+        plt.close(fig)
+
+
+class MissionContext:
+    """What bindings can see and do (iterator, planner, vehicle, map, logging)."""
+
+    def __init__(self, executor: Executor):
+        self._ex = executor
+        self.grid = executor.grid
+        self.vehicle = executor.vehicle
+        self.iterator: Iterator = executor.iterator
+        self.planner: MotionPlanner = executor.planner
+        self.altitude = executor.altitude
+        self.target_cell: int | None = None
+        self.last_arrival: int | None = None
+
+    def predicted_pose(self) -> Pose:
+        """Where the vehicle will be when the current leg ends: the arrival pose of the active
+        target, or the current pose when idle (the Sorter's reference pose)."""
+        if self.target_cell is not None and not self.planner.arrived:
+            x, y = self.grid.centre(self.target_cell)
+            return Pose(x, y, self.planner.heading)
+        p = self.vehicle.pose()
+        return Pose(p.x, p.y, p.course)
+
+    def go(self, cell: int) -> None:
+        self._ex.settle_compute()      # plan from where the aircraft is after thinking
+        self.target_cell = int(cell)
+        arrival = self.planner.go(*self.grid.centre(cell))
+        self._ex.counts["go"] += 1
+        # Sorting happens while the aircraft flies the leg, from the predicted arrival pose.
+        self.iterator.resort(arrival)
+
+    def current_cell(self) -> int | None:
+        """The cell the vehicle is at: the last arrival's cell (the plan only senses the current
+        location after ``arrived``), else the cell under the vehicle."""
+        if self.last_arrival is not None:
+            return self.last_arrival
+        p = self.vehicle.pose()
+        c = self.grid.cell_at(p.x, p.y)
+        return None if c < 0 else int(c)
+
+    def record_photo(self) -> None:
+        p = self.vehicle.pose()
+        cell = self.current_cell()
+        self._ex.photos.append((p.t - self._ex.t0, -1 if cell is None else cell, p.x, p.y))
+
+    def note(self, text: str) -> None:
+        self._ex.log_entry("x", text)
+
+
+class MissionEnd(Exception):
+    def __init__(self, ok: bool, reason: str):
+        super().__init__(reason)
+        self.ok = ok
+        self.reason = reason
+
+
+class Executor:
+    """Runs ``table`` on ``vehicle`` over ``grid``; see the module docstring."""
+
+    def __init__(self, table: ControllerTable, grid: GridMap, vehicle: Vehicle,
+                 bindings: Bindings | None = None, config: RunConfig | None = None):
+        self.table = table
+        self.grid = grid
+        self.vehicle = vehicle
+        self.cfg = config or RunConfig()
+        self.altitude = self.cfg.altitude if self.cfg.altitude is not None else grid.altitude
+        radius = self.cfg.turn_radius or 1.4 * vehicle.min_turn_radius
+        self.radius = radius
+        self.planner = MotionPlanner(vehicle, radius=radius,
+                                     arrival_heading=grid.arrival_heading,
+                                     parallel=self.cfg.parallel, cell_size=grid.cell_size,
+                                     lead=self.cfg.lead, accept=self.cfg.accept,
+                                     mode=self.cfg.planner_mode)
+        interesting = np.zeros(grid.num_cells, dtype=bool)
+        for ids in grid.sensors.values():
+            interesting[ids] = True
+        sorter = make_sorter(self.cfg.sorter, radius=radius,
+                             arrival_heading=grid.arrival_heading, parallel=self.cfg.parallel,
+                             interesting=interesting, seed=self.cfg.seed)
+        xs, ys = grid.centres()
+        p = vehicle.pose()
+        self.iterator = Iterator(grid.cells, xs, ys, sorter, Pose(p.x, p.y, p.course))
+        self.bindings = (bindings or Bindings()).resolve(
+            table.controllable, table.uncontrollable, grid.sensors, grid.num_cells)
+        self.alphabet = {canon(a): a for a in table.controllable | table.uncontrollable}
+        self.no_next = {a for a in table.uncontrollable if canon(a) in ("n.next", "no.next")}
+        self.controller = Controller(table)
+        self.ctx = MissionContext(self)
+        self.log: list[LogEntry] = []
+        self.photos: list[tuple[float, int, float, float]] = []
+        self.arrivals: list[tuple[float, int, float, float]] = []
+        self.track: list[tuple[float, float, float, float]] = []
+        self.counts = {"steps": 0, "controllable": 0, "uncontrollable": 0, "go": 0,
+                       "arrived": 0, "passes": 0, "logged": 0}
+        self.compute_s = 0.0
+        self._debt = 0.0
+        self.t0 = vehicle.time
+        self._waiting: dict[str, str] = {}    # vehicle/planner event kind -> answer label
+        self._pending: deque[str] = deque()
+        self._next_progress = 0.0
+        self._last_track = -1e9
+
+    # -- bookkeeping ------------------------------------------------------------------------
+    def log_entry(self, kind: str, label: str, cell: int = -1) -> None:
+        self.counts["logged"] += 1
+        if len(self.log) >= self.cfg.log_limit:
+            return
+        p = self.vehicle.pose()
+        self.log.append(LogEntry(round(p.t - self.t0, 3), kind, label, self.controller.state,
+                                 p.x, p.y, p.alt, cell))
+
+    def settle_compute(self) -> None:
+        """Charge the measured think time to the simulated clock (see module docstring)."""
+        if self._debt <= 0:
+            return
+        self.compute_s += self._debt
+        if not self.cfg.ideal_compute and self.vehicle.is_simulated:
+            self.vehicle.advance(self._debt)
+        self._debt = 0.0
+
+    def _record_track(self, force: bool = False) -> None:
+        p = self.vehicle.pose()
+        if force or p.t - self._last_track >= self.cfg.track_every:
+            self.track.append((p.t - self.t0, p.x, p.y, p.alt))
+            self._last_track = p.t
+
+    def _progress(self, force: bool = False) -> None:
+        if self.cfg.progress is None:
+            return
+        t = self.vehicle.time - self.t0
+        if force or t >= self._next_progress:
+            it = self.iterator
+            self.cfg.progress(
+                f"[{t:7.0f} s] visited {self.counts['arrived']}, photos {len(self.photos)}, "
+                f"iterator {it.num_done} done / {it.remaining_count()} remaining, "
+                f"{self.counts['steps']} steps, compute {self.compute_s:.2f} s")
+            self._next_progress = t + self.cfg.progress_every
+
+    # -- main loop ----------------------------------------------------------------------------
+    def _answer(self, labels) -> None:
+        for a in answers_of(labels):
+            label = a if a in self.table.uncontrollable else self.alphabet.get(canon(a))
+            if label is None or label not in self.table.uncontrollable:
+                raise MissionEnd(False, f"binding answered {a!r}, which is not an uncontrollable "
+                                        f"label of the controller")
+            self._pending.append(label)
+
+    def _take_off(self) -> None:
+        v = self.vehicle
+        v.arm()
+        v.takeoff(self.altitude)
+        deadline = v.time + 600.0
+        while v.time < deadline:
+            v.advance(self.cfg.tick)
+            self._record_track()
+            for e in v.poll_events():
+                self.log_entry("v", e.kind)
+                if e.kind == "takeoff_complete":
+                    return
+                if e.kind in ("rejected", "link_lost"):
+                    raise MissionEnd(False, f"take-off failed: {e.kind} {e.detail}")
+        raise MissionEnd(False, "take-off did not complete within 600 s")
+
+    def _physical_tick(self) -> None:
+        self.settle_compute()
+        self.vehicle.advance(self.cfg.tick)
+        self._record_track()
+        for pe in self.planner.update():
+            self.log_entry("p", f"{pe.kind} {pe.detail}", self.ctx.target_cell or -1)
+            if pe.kind == "arrived":
+                cell = self.ctx.target_cell
+                self.ctx.last_arrival = cell
+                self.counts["arrived"] += 1
+                p = self.vehicle.pose()
+                self.arrivals.append((p.t - self.t0, -1 if cell is None else cell, p.x, p.y))
+                if "arrived" in self._waiting:
+                    self._pending.append(self._waiting.pop("arrived"))
+            elif pe.kind == "stuck":
+                raise MissionEnd(False, f"motion planner cannot reach cell "
+                                        f"{self.grid.cell_name(self.ctx.target_cell or 0)} "
+                                        f"({pe.detail})")
+        for e in self.vehicle.poll_events():
+            self.log_entry("v", f"{e.kind} {e.detail}".strip())
+            if e.kind == "link_lost":
+                raise MissionEnd(False, f"link lost: {e.detail}; the autopilot's failsafe is in "
+                                        f"charge")
+            if e.kind in self._waiting:
+                self._pending.append(self._waiting.pop(e.kind))
+
+    def run(self) -> MissionResult:
+        ok, reason = True, "completed"
+        v = self.vehicle
+        try:
+            has_takeoff = any(b.kind == "takeoff" for b in self.bindings.values())
+            if self.cfg.auto_takeoff and not has_takeoff:
+                self._take_off()
+                p = v.pose()
+                self.iterator.reset(Pose(p.x, p.y, p.course))
+                # Fly on straight until the first go.
+                self.planner.go(p.x + 2000 * math.cos(p.course), p.y + 2000 * math.sin(p.course))
+                self.planner.arrived = True
+            self.t0 = v.time
+            self._loop()
+        except MissionEnd as end:
+            ok, reason = end.ok, end.reason
+        except BindingError as exc:
+            ok, reason = False, f"binding error: {exc}"
+        if not ok:
+            self.log_entry("x", f"safe end: {reason}")
+            if self.cfg.end_action == "rtl":
+                v.rtl()
+            elif self.cfg.end_action == "loiter":
+                v.loiter()
+        self._record_track(force=True)
+        self._progress(force=True)
+        return MissionResult(ok, reason, self._summary(ok, reason), self.log,
+                             np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
+                             self.photos, self.arrivals, self.grid, dict(self.counts))
+
+    def _loop(self) -> None:
+        ctrl = self.controller
+        v = self.vehicle
+        cfg = self.cfg
+        pending = self._pending
+        streak = 0
+        perf = time.perf_counter
+        uncontrollable = self.table.uncontrollable
+        while True:
+            if v.time - self.t0 > cfg.max_time:
+                raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+            if pending:
+                t = perf()
+                label = pending.popleft()
+                try:
+                    ctrl.step(label)
+                except RefusedEvent as exc:
+                    raise MissionEnd(False, f"unexpected event: {exc}") from None
+                self.counts["steps"] += 1
+                self.counts["uncontrollable"] += 1
+                streak = 0
+                self._debt += perf() - t
+                self.log_entry("u", label)
+                if label in self.no_next:
+                    self.counts["passes"] += 1
+                    if cfg.passes and self.counts["passes"] >= cfg.passes:
+                        self.settle_compute()
+                        return
+                continue
+            enabled = ctrl.enabled_controllable()
+            if enabled:
+                t = perf()
+                label = cfg.choose(enabled) if cfg.choose else enabled[0]
+                ctrl.step(label)
+                b: Binding = self.bindings[label]
+                self.log_entry("c", label)
+                self._answer(b.handler(self.ctx, label))
+                if b.completes_on and b.answer:
+                    self._waiting[b.completes_on] = b.answer
+                self.counts["steps"] += 1
+                self.counts["controllable"] += 1
+                self._debt += perf() - t
+                streak += 1
+                if streak > cfg.livelock_limit:
+                    raise MissionEnd(False, "livelock: the controller keeps acting without any "
+                                            "answer from the environment")
+                continue
+            if not ctrl.enabled():
+                raise MissionEnd(False, f"controller deadlocked in state {ctrl.state}")
+            if not self._waiting:
+                exp = ", ".join(sorted(ctrl.enabled() & uncontrollable))
+                raise MissionEnd(False, f"controller waits for {exp}, which nothing will produce")
+            self._physical_tick()
+            self._progress()
+
+    def _summary(self, ok: bool, reason: str) -> dict:
+        duration = self.vehicle.time - self.t0
+        tr = np.asarray(self.track, dtype=np.float64).reshape(-1, 4)
+        # Distance flown during the mission proper (after the controller started).
+        m = tr[:, 0] >= 0
+        seg = np.hypot(np.diff(tr[m, 1]), np.diff(tr[m, 2])) if m.sum() > 1 else np.zeros(0)
+        distance = float(seg.sum())
+        ideal = ideal_distance([(x, y) for _, _, x, y in self.arrivals],
+                               start=tuple(tr[m][0, 1:3]) if m.any() else self.grid.home)
+        speed = self.vehicle.airspeed
+        ideal_t = ideal / speed if speed > 0 else float("nan")
+        overhead = (duration - ideal_t) / ideal_t * 100 if ideal_t > 0 else float("nan")
+        return {
+            "ok": ok, "reason": reason, "controller": self.table.name,
+            "sorter": self.cfg.sorter, "ideal_compute": self.cfg.ideal_compute,
+            "locations": int(len(self.grid.cells)),
+            "duration_s": round(duration, 2), "distance_m": round(distance, 1),
+            "ideal_distance_m": round(ideal, 1), "ideal_duration_s": round(ideal_t, 2),
+            "overhead_pct": round(overhead, 1) if math.isfinite(overhead) else None,
+            "arrivals": self.counts["arrived"], "photos": len(self.photos),
+            "go": self.counts["go"], "steps": self.counts["steps"],
+            "passes": self.counts["passes"], "misses": self.planner.misses,
+            "resorts": self.iterator.resorts,
+            "compute_s": round(self.compute_s, 4) if not self.cfg.ideal_compute else 0.0,
+        }
+
+
+def ideal_distance(points: Sequence[tuple[float, float]], start: tuple[float, float]) -> float:
+    """The paper's "ideal": minimum straight-line flight distance to visit ``points`` from
+    ``start`` at constant speed, ignoring turn limits.  The exact minimum is a TSP; we take the
+    better of two feasible tours — the order actually flown and a nearest-neighbour tour (for up
+    to 5,000 points) — so it is an upper bound on the true minimum and overheads are, if
+    anything, under-stated."""
+    if not points:
+        return 0.0
+    pts = np.asarray(points, dtype=np.float64)
+    path = np.vstack([np.asarray(start, dtype=np.float64)[None, :], pts])
+    flown = float(np.hypot(*np.diff(path, axis=0).T).sum())
+    if len(pts) > 5000:
+        return flown
+    todo = np.ones(len(pts), dtype=bool)
+    cur = np.asarray(start, dtype=np.float64)
+    total = 0.0
+    for _ in range(len(pts)):
+        d = np.hypot(pts[:, 0] - cur[0], pts[:, 1] - cur[1])
+        d[~todo] = np.inf
+        i = int(np.argmin(d))
+        total += float(d[i])
+        todo[i] = False
+        cur = pts[i]
+    return min(flown, total)
+
+
+def load_controller(path: str | Path) -> ControllerTable:
+    """Import a controller module from ``path`` and return its :class:`ControllerTable`.
+
+    Accepted (first match): module-level ``TABLE`` (what ``iterc compile`` emits), ``CONTROLLER``
+    (a table or a Controller), ``make_controller()`` (its ``.table``), or the only module-level
+    ControllerTable.  Raises ``ValueError`` with a user-facing message otherwise.
+    """
+    import importlib.util
+    import sys
+
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"controller module {path} not found")
+    name = f"_iterplan_controller_{abs(hash(str(p.resolve())))}"
+    spec = importlib.util.spec_from_file_location(name, p)
+    if spec is None or spec.loader is None:
+        raise ValueError(f"{path} is not a Python module")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    try:
+        spec.loader.exec_module(mod)
+    except Exception as exc:  # a broken module is the user's input, not our bug
+        raise ValueError(f"cannot import {path}: {type(exc).__name__}: {exc}") from None
+    for attr in ("TABLE", "CONTROLLER"):
+        obj = getattr(mod, attr, None)
+        if isinstance(obj, ControllerTable):
+            return obj
+        if isinstance(obj, Controller):
+            return obj.table
+    mk = getattr(mod, "make_controller", None)
+    if callable(mk):
+        c = mk()
+        if isinstance(c, Controller):
+            return c.table
+    tables = [v for v in vars(mod).values() if isinstance(v, ControllerTable)]
+    if len(tables) == 1:
+        return tables[0]
+    raise ValueError(f"{path} defines no controller: expected a module-level TABLE "
+                     f"(ControllerTable), CONTROLLER or make_controller()")

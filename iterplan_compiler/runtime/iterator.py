@@ -1,0 +1,140 @@
+"""The Iterator ⟨D, n, R⟩ of the paper (§III-B-1), with a Sorter choosing the order.
+
+Paper definition, implemented literally:
+
+* initialisation: ``n`` is set to one element of L, ``R = L \\ {n}``, ``D = ∅``;
+* ``has_next``: true iff ``n`` is not null;
+* ``remove_next``: adds ``n`` to ``D``; if ``R = ∅`` sets ``n`` to null, otherwise sets ``n`` to a
+  location of ``R`` and removes it from ``R``;
+* ``reset``: the iterator is re-initialised (over all of L again).
+
+*Which* element of R becomes ``n`` is the Sorter's business: ``R`` is kept as a queue in offered
+order and :meth:`Iterator.resort` re-orders it from a (predicted) pose — the executor calls it on
+``go.next`` with the arrival pose, as in the paper.  Ordering is lazy: only the front block of the
+queue is fully sorted (``argpartition`` + ``argsort`` of ``block`` elements); the rest is sorted
+block by block when the iterator gets there, so a re-sort costs about one kernel pass.
+
+All per-location data are NumPy arrays; ``remove_next``/``has_next`` are O(1) amortised.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from iterplan_compiler.runtime.sorter import Pose, Sorter
+
+NULL = -1
+
+
+class Iterator:
+    """Iterator over the locations ``ids`` (cell ids) with ENU centres ``xs``, ``ys``.
+
+    ``n`` is exposed as :attr:`next` (a cell id, or ``None`` when null).  ``D`` is the boolean
+    mask :attr:`done` over positions in ``ids``; ``R`` is :meth:`remaining`.
+    """
+
+    def __init__(self, ids: np.ndarray, xs: np.ndarray, ys: np.ndarray, sorter: Sorter,
+                 pose: Pose, *, block: int = 4096):
+        self.ids = np.asarray(ids, dtype=np.int64)
+        if len(self.ids) == 0:
+            raise ValueError("an iterator needs at least one location")
+        self.xs = np.asarray(xs, dtype=np.float32)
+        self.ys = np.asarray(ys, dtype=np.float32)
+        self.sorter = sorter
+        self.block = int(block)
+        self.done = np.zeros(len(self.ids), dtype=bool)
+        self.num_done = 0
+        self.resorts = 0
+        self._queue = np.zeros(0, dtype=np.int64)   # positions (into ids) of R, offered order
+        self._keys: np.ndarray = np.zeros(0)
+        self._head = 0          # R = _queue[_head:]
+        self._sorted_to = 0     # _queue[_head:_sorted_to] is in final order
+        self._n = NULL          # position of n, or NULL
+        self.reset(pose)
+
+    # -- the paper's operations ---------------------------------------------------------------
+    def has_next(self) -> bool:
+        """True iff ``n`` is not null."""
+        return self._n != NULL
+
+    @property
+    def next(self) -> int | None:
+        """The cell id of ``n`` (None when null)."""
+        return None if self._n == NULL else int(self.ids[self._n])
+
+    @property
+    def next_position(self) -> int:
+        """Index of ``n`` in :attr:`ids` (``NULL`` = -1 when null)."""
+        return self._n
+
+    def remove_next(self) -> None:
+        """Add ``n`` to D; take the first element of R (in sorted order) as the new ``n``."""
+        if self._n == NULL:
+            raise RuntimeError("remove_next with a null next location")
+        if not self.done[self._n]:
+            self.done[self._n] = True
+            self.num_done += 1
+        self._n = self._pop()
+
+    def reset(self, pose: Pose) -> None:
+        """Re-initialise: D = ∅, n = the best location of L for ``pose``, R = L \\ {n}."""
+        self.done[:] = False
+        self.num_done = 0
+        self._order(np.arange(len(self.ids), dtype=np.int64), pose)
+        self._n = self._pop()
+
+    def resort(self, pose: Pose) -> None:
+        """Re-order R for ``pose`` (``n`` itself is unchanged, as in the paper)."""
+        self._order(self._queue[self._head:], pose)
+
+    # -- introspection --------------------------------------------------------------------------
+    def remaining_count(self) -> int:
+        return len(self._queue) - self._head
+
+    def remaining(self) -> np.ndarray:
+        """Cell ids of R (in the current offered order only where already sorted)."""
+        return self.ids[self._queue[self._head:]]
+
+    def processed(self) -> np.ndarray:
+        """Cell ids of D."""
+        return self.ids[self.done]
+
+    def peek_order(self, k: int) -> np.ndarray:
+        """The next ``k`` cell ids R will offer (forces sorting of that prefix)."""
+        self._ensure_sorted(self._head + k)
+        return self.ids[self._queue[self._head:self._head + k]]
+
+    # -- internals ------------------------------------------------------------------------------
+    def _order(self, positions: np.ndarray, pose: Pose) -> None:
+        self.resorts += 1
+        self._queue = positions.copy()
+        self._keys = self.sorter.keys(self.xs[positions], self.ys[positions],
+                                      self.ids[positions], pose)
+        self._head = 0
+        self._sorted_to = 0
+
+    def _ensure_sorted(self, upto: int) -> None:
+        n = len(self._queue)
+        while self._sorted_to < min(upto, n):
+            lo = self._sorted_to
+            # Blocks grow geometrically so a full pass costs O(n log n), not O(n^2 / block).
+            hi = min(lo + max(self.block, lo), n)
+            keys = self._keys[lo:]
+            if hi < n:
+                # Bring the block's smallest keys to the front, then sort just those.
+                part = np.argpartition(keys, hi - lo - 1)
+                self._queue[lo:] = self._queue[lo:][part]
+                self._keys[lo:] = keys[part]
+            sub = np.argsort(self._keys[lo:hi], kind="stable")
+            self._queue[lo:hi] = self._queue[lo:hi][sub]
+            self._keys[lo:hi] = self._keys[lo:hi][sub]
+            self._sorted_to = hi
+
+    def _pop(self) -> int:
+        if self._head >= len(self._queue):
+            return NULL
+        if self._head >= self._sorted_to:
+            self._ensure_sorted(self._head + 1)
+        pos = int(self._queue[self._head])
+        self._head += 1
+        return pos

@@ -1,0 +1,265 @@
+"""Motion planner: the paper's scheme (§V-A "Motion planning and iterator sorting").
+
+For ``go(target)`` the planner computes the shortest path made of a turn at the planning radius,
+a straight segment and a turn (CSC: "at most two turns") from the vehicle's current pose to the
+target, arriving *parallel to a fixed direction* (the arrival heading or its opposite, whichever
+is shorter; or exactly the arrival heading when ``parallel=False``).  The same geometry is what
+the Sorter ranks locations by.
+
+Following: the path is sampled every ``ds`` metres and extended straight beyond the target along
+the arrival heading.  Each :meth:`MotionPlanner.update` projects the vehicle onto the path and
+commands either a course towards a point ``lookahead`` metres further on (``mode="course"``:
+ArduPlane GUIDED_CHANGE_HEADING / the simulator's course hold), or a GUIDED fly-to "carrot" far
+placed ``carrot_distance`` metres out along that same pursuit course, far enough that the
+autopilot never reaches its loiter capture (``mode="carrot"``: plain MISSION_ITEM_INT fly-to).
+
+Visiting: a fixed wing never stops, and ArduPlane's own "reached" fires 100+ m out, so the
+planner decides: the target counts as visited (``arrived``) once the vehicle is within
+``lead`` metres *before* the target's finish line (the line through the cell centre perpendicular
+to the arrival heading) and within ``accept`` metres of the path's final line (cross-track).
+Defaults keep the vehicle inside the cell (``lead`` = 0.25 cell, ``accept`` = 0.35 cell).  If it
+crosses the finish line outside the corridor the target was missed and the planner replans
+from where it is (counted in :attr:`misses`).  After arrival the vehicle keeps flying straight on
+the extension, so the next ``go`` is handed over while flying through the cell.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from iterplan_compiler.runtime.sorter import Pose
+from iterplan_compiler.runtime.vehicle import Vehicle
+
+TWO_PI = 2 * math.pi
+
+
+def _m(a: float) -> float:
+    a = math.fmod(a, TWO_PI)
+    if a < 0:
+        a += TWO_PI
+    return 0.0 if a > TWO_PI - 1e-9 else a
+
+
+@dataclass(frozen=True)
+class DubinsPath:
+    """A CSC path: ``word`` like ``"LSR"``, segment lengths in metres (arc lengths for turns)."""
+
+    start: Pose
+    word: str
+    segments: tuple[float, float, float]
+    radius: float
+
+    @property
+    def length(self) -> float:
+        return sum(self.segments)
+
+    @property
+    def end_heading(self) -> float:
+        h = self.start.heading
+        for seg, ln in zip(self.word, self.segments):
+            if seg == "L":
+                h += ln / self.radius
+            elif seg == "R":
+                h -= ln / self.radius
+        return h
+
+    def sample(self, ds: float = 2.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Points every ~``ds`` metres (x, y, heading), start and end included."""
+        xs, ys, hs = [self.start.x], [self.start.y], [self.start.heading]
+        x, y, h = self.start.x, self.start.y, self.start.heading
+        r = self.radius
+        for seg, ln in zip(self.word, self.segments):
+            if ln <= 1e-9:
+                continue
+            n = max(1, math.ceil(ln / ds))
+            s = np.linspace(ln / n, ln, n)
+            if seg == "S":
+                px = x + s * math.cos(h)
+                py = y + s * math.sin(h)
+                ph = np.full(n, h)
+            else:
+                sgn = 1.0 if seg == "L" else -1.0
+                cx, cy = x - sgn * r * math.sin(h), y + sgn * r * math.cos(h)
+                ph = h + sgn * s / r
+                px = cx + sgn * r * np.sin(ph)
+                py = cy - sgn * r * np.cos(ph)
+            xs.extend(px)
+            ys.extend(py)
+            hs.extend(ph)
+            x, y, h = float(px[-1]), float(py[-1]), float(ph[-1])
+        return np.asarray(xs), np.asarray(ys), np.asarray(hs)
+
+
+def shortest_csc(start: Pose, x: float, y: float, heading: float, radius: float) -> DubinsPath:
+    """Shortest CSC path (float64, scalar) from ``start`` to ``(x, y)`` arriving with
+    ``heading``.  Same circle-tangent geometry as the vectorised Sorter kernel."""
+    r = radius
+    c0, s0 = math.cos(start.heading), math.sin(start.heading)
+    c1, s1 = math.cos(heading), math.sin(heading)
+    starts = {"L": (start.x - r * s0, start.y + r * c0), "R": (start.x + r * s0, start.y - r * c0)}
+    goals = {"L": (x - r * s1, y + r * c1), "R": (x + r * s1, y - r * c1)}
+    best: DubinsPath | None = None
+    for a in "LR":
+        for b in "LR":
+            (ax, ay), (bx, by) = starts[a], goals[b]
+            dx, dy = bx - ax, by - ay
+            d2 = dx * dx + dy * dy
+            if a == b:
+                straight = math.sqrt(d2)
+                psi = math.atan2(dy, dx)
+            else:
+                if d2 < 4 * r * r:
+                    continue
+                straight = math.sqrt(d2 - 4 * r * r)
+                sgn = 1.0 if a == "L" else -1.0      # LSR: +atan2(2r, L); RSL: -atan2(2r, L)
+                psi = math.atan2(dy, dx) + sgn * math.atan2(2 * r, straight)
+            t1 = _m(psi - start.heading) if a == "L" else _m(start.heading - psi)
+            t2 = _m(heading - psi) if b == "L" else _m(psi - heading)
+            cand = DubinsPath(start, f"{a}S{b}", (t1 * r, straight, t2 * r), r)
+            if best is None or cand.length < best.length:
+                best = cand
+    assert best is not None  # LSL and RSR always exist
+    return best
+
+
+@dataclass
+class PlannerEvent:
+    kind: str          # "arrived" or "missed" or "stuck"
+    t: float
+    target: tuple[float, float]
+    detail: str = ""
+
+
+class MotionPlanner:
+    """Plans and follows CSC paths on a :class:`Vehicle`; see the module docstring."""
+
+    def __init__(self, vehicle: Vehicle, *, radius: float, arrival_heading: float,
+                 parallel: bool = True, cell_size: float = 50.0, lead: float | None = None,
+                 accept: float | None = None, lookahead: float | None = None,
+                 mode: str = "course", ds: float = 2.0, max_misses: int = 8,
+                 carrot_distance: float = 400.0):
+        if mode not in ("course", "carrot"):
+            raise ValueError(f"unknown planner mode {mode!r}")
+        self.vehicle = vehicle
+        self.radius = float(radius)
+        self.arrival_heading = float(arrival_heading)
+        self.parallel = parallel
+        self.lead = 0.25 * cell_size if lead is None else float(lead)
+        self.accept = 0.35 * cell_size if accept is None else float(accept)
+        self.lookahead = 0.6 * self.radius if lookahead is None else float(lookahead)
+        self.carrot_distance = float(carrot_distance)
+        self.mode = mode
+        self.ds = ds
+        self.max_misses = max_misses
+        self.target: tuple[float, float] | None = None
+        self.heading: float = arrival_heading
+        self.path: DubinsPath | None = None
+        self._px = self._py = self._ph = np.zeros(0)
+        self._idx = 0
+        self._end = 0            # index of the target sample
+        self.arrived = True      # no active target
+        self.misses = 0
+        self._target_misses = 0
+        self.planned_length = 0.0
+        self.last_cmd: tuple[str, float, float] | None = None
+
+    # -- planning -----------------------------------------------------------------------------
+    def path_to(self, start: Pose, x: float, y: float) -> DubinsPath:
+        """Shortest admissible path (arrival heading, or either direction when parallel)."""
+        best = shortest_csc(start, x, y, self.arrival_heading, self.radius)
+        if self.parallel:
+            other = shortest_csc(start, x, y, self.arrival_heading + math.pi, self.radius)
+            if other.length < best.length - 1e-9:
+                best = other
+        return best
+
+    def go(self, x: float, y: float) -> Pose:
+        """Start flying to ``(x, y)``; returns the predicted arrival pose (for the Sorter)."""
+        self.target = (float(x), float(y))
+        self._target_misses = 0
+        self._plan()
+        return Pose(x, y, self.heading)
+
+    def _plan(self) -> None:
+        assert self.target is not None
+        p = self.vehicle.pose()
+        self.path = self.path_to(Pose(p.x, p.y, p.course), *self.target)
+        self.heading = self.path.end_heading
+        self.planned_length += self.path.length
+        xs, ys, hs = self.path.sample(self.ds)
+        self._end = len(xs) - 1
+        # Straight extension beyond the target: where the vehicle flies while the plan thinks.
+        ext = np.arange(1, int(2000 / self.ds) + 1) * self.ds
+        c, s = math.cos(self.heading), math.sin(self.heading)
+        self._px = np.concatenate([xs, self.target[0] + ext * c])
+        self._py = np.concatenate([ys, self.target[1] + ext * s])
+        self._ph = np.concatenate([hs, np.full(len(ext), self.heading)])
+        self._idx = 0
+        self.arrived = False
+
+    # -- following ------------------------------------------------------------------------------
+    def update(self) -> list[PlannerEvent]:
+        """Command the vehicle for its current pose; report arrival/miss events."""
+        if self.path is None:
+            return []
+        p = self.vehicle.pose()
+        events: list[PlannerEvent] = []
+        # Project onto the path, searching forward from the last index (paths never loop back
+        # onto themselves within a short window, so a local search is unambiguous).
+        lo = self._idx
+        hi = min(len(self._px), lo + int(4 * self.radius / self.ds) + 50)
+        d2 = (self._px[lo:hi] - p.x) ** 2 + (self._py[lo:hi] - p.y) ** 2
+        self._idx = lo + int(np.argmin(d2))
+        if self._idx >= len(self._px) - 10:
+            # Ran off the extension (long think time): extend by replanning straight ahead.
+            self._extend_from(p)
+        near_end = self._idx >= self._end - int((self.lead + 4 * self.ds) / self.ds)
+        if not self.arrived and self.target is not None and near_end:
+            # Only judge the finish line on the path's final stretch: early on, a looping path
+            # can put the vehicle geometrically "beyond" the line without having been there.
+            tx, ty = self.target
+            c, s = math.cos(self.heading), math.sin(self.heading)
+            along = (p.x - tx) * c + (p.y - ty) * s        # < 0 before the finish line
+            cross = -(p.x - tx) * s + (p.y - ty) * c
+            if along >= -self.lead:
+                if abs(cross) <= self.accept:
+                    self.arrived = True
+                    events.append(PlannerEvent("arrived", p.t, self.target,
+                                               f"cross-track {cross:+.1f} m"))
+                elif along >= 0:
+                    self.misses += 1
+                    self._target_misses += 1
+                    kind = "stuck" if self._target_misses > self.max_misses else "missed"
+                    events.append(PlannerEvent(kind, p.t, self.target,
+                                               f"cross-track {cross:+.1f} m"))
+                    if kind == "missed":
+                        self._plan()
+                        return events + self.update()
+        self._command(p)
+        return events
+
+    def _extend_from(self, p) -> None:
+        ext = np.arange(0, int(2000 / self.ds) + 1) * self.ds
+        c, s = math.cos(self.heading), math.sin(self.heading)
+        bx, by = self._px[self._idx], self._py[self._idx]
+        self._px = np.concatenate([self._px[:self._idx], bx + ext * c])
+        self._py = np.concatenate([self._py[:self._idx], by + ext * s])
+        self._ph = np.concatenate([self._ph[:self._idx], np.full(len(ext), self.heading)])
+
+    def _command(self, p) -> None:
+        k = min(self._idx + max(1, int(self.lookahead / self.ds)), len(self._px) - 1)
+        cx, cy = float(self._px[k]), float(self._py[k])
+        course = math.atan2(cy - p.y, cx - p.x)   # pure pursuit of the look-ahead point
+        if self.mode == "course":
+            self.last_cmd = ("course", course, 0.0)
+            self.vehicle.steer(course)
+        else:
+            # A fly-to point far out along the pursuit course: the autopilot's L1 capture law
+            # then steers that course without ever reaching its loiter capture.
+            gx = p.x + self.carrot_distance * math.cos(course)
+            gy = p.y + self.carrot_distance * math.sin(course)
+            self.last_cmd = ("goto", gx, gy)
+            self.vehicle.goto(gx, gy)

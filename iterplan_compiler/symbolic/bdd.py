@@ -1,0 +1,163 @@
+"""BDD manager factory and bit-vector helpers over ``dd``'s common API.
+
+Contract:
+
+* :func:`new_manager` returns a fresh ``dd.cudd.BDD`` when CUDD bindings are importable, else a
+  ``dd.autoref.BDD``; every other function here (and all of synthesis) uses only the interface
+  both share (``declare``, ``var``, ``true``/``false``, ``&``/``|``/``~``, ``exist``, ``let``,
+  ``count``, ``pick_iter``, ``reorder``, ``configure``, ``vars``), so one code path serves both.
+  The manager is always passed explicitly — there is no module-level manager.
+* :class:`BitVec` is an unsigned integer encoded in ``width`` named BDD variables (LSB first);
+  :func:`declare_interleaved` declares current/next copies so that bit *k* of a vector and its
+  primed copy are adjacent in the variable order (the usual choice for transition relations).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+Node = Any  # a dd BDD node (dd.cudd.Function or dd.autoref.Function)
+Manager = Any
+
+try:  # pragma: no cover - which branch runs depends on the installation
+    import dd.cudd as _cudd
+
+    BACKEND = "cudd"
+except ImportError:  # pragma: no cover
+    _cudd = None
+    BACKEND = "autoref"
+
+
+def new_manager(*, backend: str | None = None, reordering: bool = False) -> Manager:
+    """Return a new BDD manager (``backend``: ``"cudd"``, ``"autoref"`` or None = best).
+
+    Dynamic reordering is off by default: synthesis declares a deliberate interleaved order
+    and measured runs are reproducible only with a fixed order.
+    """
+    name = backend or BACKEND
+    if name == "cudd":
+        if _cudd is None:
+            raise ImportError("dd.cudd is not available")
+        bdd = _cudd.BDD()
+    else:
+        import dd.autoref as _autoref
+
+        bdd = _autoref.BDD()
+    bdd.configure(reordering=reordering)
+    return bdd
+
+
+def backend_of(bdd: Manager) -> str:
+    """Name of the library behind ``bdd`` (``"cudd"`` or ``"autoref"``)."""
+    return "cudd" if type(bdd).__module__.startswith("dd.cudd") else "autoref"
+
+
+def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+    """``∃ qvars. u ∧ v`` — CUDD's fused relational product when available."""
+    qv = set(qvars)
+    if not qv:
+        return u & v
+    if _cudd is not None and backend_of(bdd) == "cudd":
+        return _cudd.and_exists(u, v, qv)
+    return bdd.exist(qv, u & v)
+
+
+def bits_for(n: int) -> int:
+    """Number of bits needed to encode the values ``0 .. n-1`` (at least 1)."""
+    return max(1, (max(n, 1) - 1).bit_length())
+
+
+@dataclass(frozen=True)
+class BitVec:
+    """An unsigned integer stored in BDD variables ``names`` (least significant bit first)."""
+
+    names: tuple[str, ...]
+
+    @property
+    def width(self) -> int:
+        return len(self.names)
+
+    def eq(self, bdd: Manager, value: int) -> Node:
+        """BDD of ``self == value`` (``value`` must fit in ``width`` bits)."""
+        if value < 0 or value >= (1 << self.width):
+            raise ValueError(f"{value} does not fit in {self.width} bits")
+        u = bdd.true
+        for k, name in enumerate(self.names):
+            v = bdd.var(name)
+            u &= v if (value >> k) & 1 else ~v
+        return u
+
+    def assign(self, value: int) -> dict[str, bool]:
+        """The variable assignment encoding ``value``."""
+        return {name: bool((value >> k) & 1) for k, name in enumerate(self.names)}
+
+    def decode(self, assignment: dict[str, bool]) -> int:
+        """Integer value of this vector in a (full enough) assignment; missing bits read 0."""
+        return sum(1 << k for k, name in enumerate(self.names) if assignment.get(name, False))
+
+    def less_than(self, bdd: Manager, bound: int) -> Node:
+        """BDD of ``self < bound`` (used to exclude unused codes)."""
+        if bound >= (1 << self.width):
+            return bdd.true
+        if bound <= 0:
+            return bdd.false
+        # Build from the most significant bit down: x < b iff at the first differing bit x has 0.
+        u = bdd.false
+        eq = bdd.true
+        for k in reversed(range(self.width)):
+            v = bdd.var(self.names[k])
+            if (bound >> k) & 1:
+                u |= eq & ~v
+                eq &= v
+            else:
+                eq &= ~v
+        return u
+
+    def equal_to(self, bdd: Manager, other: BitVec) -> Node:
+        """BDD of ``self == other`` (same width)."""
+        if other.width != self.width:
+            raise ValueError("width mismatch")
+        u = bdd.true
+        for a, b in zip(self.names, other.names, strict=True):
+            u &= bdd.var(a).equiv(bdd.var(b))
+        return u
+
+
+def declare_interleaved(bdd: Manager, prefix: str, width: int) -> tuple[BitVec, BitVec]:
+    """Declare ``prefix_k`` and ``prefix_k'`` for k < width, interleaved; return (cur, nxt)."""
+    cur = tuple(f"{prefix}_{k}" for k in range(width))
+    nxt = tuple(f"{prefix}_{k}'" for k in range(width))
+    for a, b in zip(cur, nxt, strict=True):
+        bdd.declare(a, b)
+    return BitVec(cur), BitVec(nxt)
+
+
+def declare_plain(bdd: Manager, prefix: str, width: int) -> BitVec:
+    """Declare an unprimed vector ``prefix_k`` (for values that are not part of the state)."""
+    names = tuple(f"{prefix}_{k}" for k in range(width))
+    bdd.declare(*names)
+    return BitVec(names)
+
+
+def enumerate_values(bdd: Manager, u: Node, vec: BitVec) -> list[int]:
+    """Sorted integer values of ``vec`` in the set ``u`` (``u`` may mention other variables)."""
+    others = set(bdd.support(u)) - set(vec.names)
+    proj = bdd.exist(others, u) if others else u
+    out = {vec.decode(a) for a in bdd.pick_iter(proj, care_vars=set(vec.names))}
+    return sorted(out)
+
+
+def cube(bdd: Manager, assignment: dict[str, bool]) -> Node:
+    """Conjunction of literals."""
+    u = bdd.true
+    for name, val in assignment.items():
+        v = bdd.var(name)
+        u &= v if val else ~v
+    return u
+
+
+def count_nodes(nodes: Sequence[Node]) -> int:
+    """Total number of distinct BDD nodes of ``nodes`` (shared nodes counted once, approx.)."""
+    return sum(len(n) for n in nodes)

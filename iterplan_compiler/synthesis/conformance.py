@@ -1,0 +1,80 @@
+"""Conformance check of one ``verdicts.tsv`` synthesis row (used by ``iterc conformance``).
+
+``check_row(model, row) -> (ok, detail)`` where ``ok`` is True (pass), False (fail) or None
+(the row needs a feature we do not support).  It never raises.  Checks, as §4.2 describes:
+
+* the verdict (``realizable``/``unrealizable`` in ``row.expected``);
+* realizable rows: if the model has ``ExpectedC``, the composition must be strongly bisimilar
+  to it (BisimilarFSP); if it has an ``assert Check`` (or ``TESTGOAL``/``CheckWith``/
+  ``CheckWithout``) and a ``Sys``-like composite, the assertion must hold on it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def check_row(model: Any, row: Any, *, solver: str = "symbolic") -> tuple[bool | None, str]:
+    """Check one row against ``model`` (a front-end ``Model``); see the module doc."""
+    try:
+        return _check(model, row, solver)
+    except Exception as exc:  # noqa: BLE001 - a conformance row must never crash the run
+        return False, f"internal error: {type(exc).__name__}: {exc}"
+
+
+def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
+    from iterplan_compiler.diagnostics import has_errors
+    from iterplan_compiler.synthesis.driver import synthesize
+
+    name = row.composite_name
+    problem, diags = model.synthesis_problem(name)
+    if problem is None or has_errors(diags):
+        msgs = "; ".join(getattr(d, "message", str(d)) for d in diags)[:200]
+        return None, f"no synthesis problem for {name}: {msgs}"
+    result = synthesize(problem, solver=solver, explain=False)
+    want = not row.expected.startswith("unrealizable")
+    verdict = "realizable" if result.realizable else "unrealizable"
+    sizes = f"game {result.stats.get('game_states', '?')} states"
+    if result.realizable != want:
+        return False, f"{verdict} (expected {row.expected}); {sizes}"
+    if not result.realizable:
+        return True, f"{verdict}; {sizes}"
+    detail = [verdict, sizes, f"controller {result.stats.get('controller_states')} states"]
+    names = set(model.names()) if hasattr(model, "names") else set()
+    if "ExpectedC" in names:
+        from iterplan_compiler.ir.minimise import bisimilar
+
+        expected, d2 = model.build_lts("ExpectedC")
+        if expected is None:
+            return None, "cannot build ExpectedC"
+        if not bisimilar(result.composition, expected, same_alphabet=False):
+            return False, "; ".join(detail + [
+                f"not bisimilar to ExpectedC ({result.composition.num_states} vs "
+                f"{expected.num_states} states)"])
+        detail.append("bisimilar to ExpectedC")
+    ok, msg = _check_assertion(model, names, result)
+    if msg:
+        detail.append(msg)
+    return ok, "; ".join(detail)
+
+
+def _check_assertion(model: Any, names: set[str], result: Any) -> tuple[bool, str]:
+    formulas = getattr(model, "formulas", {}) or {}
+    for fname, sysname in (("Check", "Sys"), ("TESTGOAL", None), ("CheckWith", "SysWith"),
+                           ("CheckWithout", "SysWithout")):
+        if fname not in formulas:
+            continue
+        try:
+            from iterplan_compiler.fltl.check import model_check
+        except ImportError:
+            return True, "assert not checked (fltl.check missing)"
+        system = result.composition
+        if sysname and sysname in names:
+            built, _ = model.build_lts(sysname)
+            if built is not None:
+                system = built
+        res = model_check(system, formulas[fname].formula, model.fluents)
+        if not res.holds:
+            return False, f"assert {fname} violated"
+        return True, f"assert {fname} holds"
+    return True, ""

@@ -1,0 +1,172 @@
+"""Synthesis entry point: ``synthesize(problem, solver=...) -> SynthesisResult``.
+
+Pipeline (§3.12): prepare the game components (:mod:`encode`) → solve (symbolic BDD fixpoint,
+:mod:`game`, or the explicit rank solver, :mod:`explicit`) → extract MTSA's controller
+(:mod:`strategy`; the symbolic path ranks only the reachable winning subgame) → minimise →
+re-compose ``controller ∥ other body machines ∥ safety machines`` → or, when unrealizable,
+explain (:mod:`explain`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from iterplan_compiler.diagnostics import Diagnostic, error
+from iterplan_compiler.ir.lts import LTS, renamed
+from iterplan_compiler.ir.model import SynthesisProblem
+from iterplan_compiler.synthesis import explicit as _explicit
+from iterplan_compiler.synthesis.encode import GameSpec, SynthesisError, prepare
+from iterplan_compiler.synthesis.strategy import (
+    extract_controller,
+    extract_director,
+    nonblocking_region,
+)
+
+SOLVERS = ("symbolic", "explicit")
+
+
+@dataclass
+class SynthesisResult:
+    """Outcome of :func:`synthesize`.
+
+    ``controller`` — the (minimised) controller LTS over the plant alphabet, or None;
+    ``composition`` — ``controller ∥ other body machines ∥ safety machines`` named like the
+    composite (None when unrealizable); ``explanation`` — human-readable reason when
+    unrealizable (empty otherwise); ``stats`` — sizes and per-phase seconds;
+    ``diagnostics`` — errors for problems that could not be posed as a game.
+    """
+
+    realizable: bool
+    controller: LTS | None
+    composition: LTS | None
+    explanation: str
+    stats: dict[str, Any] = field(default_factory=dict)
+    diagnostics: tuple[Diagnostic, ...] = ()
+
+
+def _compose(components: list[LTS], name: str) -> LTS:
+    try:
+        from iterplan_compiler.ir.compose import compose
+    except ImportError:  # pragma: no cover - compose.py is part of the tree
+        return _explicit.compose_explicit(components, name)
+    return compose(components, name)
+
+
+def _minimise(lts: LTS) -> LTS:
+    try:
+        from iterplan_compiler.ir.minimise import strong_minimise
+    except ImportError:  # pragma: no cover
+        return lts
+    return strong_minimise(lts, lts.name)
+
+
+def synthesize(
+    problem: SynthesisProblem,
+    *,
+    solver: str = "symbolic",
+    progress: Callable[[str], None] | None = None,
+    explain: bool = True,
+    minimise: bool = True,
+    max_states: int | None = 2_000_000,
+    order: str = "action_first",
+) -> SynthesisResult:
+    """Solve ``problem`` (§3) and build its controller; never raises for bad specs.
+
+    ``solver`` — ``"symbolic"`` (BDD, default) or ``"explicit"`` (MTSA's rank solver);
+    both give the same verdict and the same controller.  ``order`` selects the symbolic
+    variable order (see :mod:`game`).  Stats keys: ``game_states``, ``plant_states``
+    (explicit) / ``bdd_nodes`` (symbolic), ``controller_states``, ``t_<phase>`` seconds.
+    """
+    if solver not in SOLVERS:
+        raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVERS}")
+    stats: dict[str, Any] = {"solver": solver}
+    say = progress or (lambda _msg: None)
+    t0 = time.perf_counter()
+    try:
+        spec = prepare(problem)
+    except SynthesisError as e:
+        return SynthesisResult(False, None, None, e.message, stats,
+                               (error(e.code, e.message, problem.span),))
+    stats["mode"] = spec.mode
+    stats["warnings"] = list(spec.warnings)
+    stats["t_prepare"] = time.perf_counter() - t0
+    name = problem.name
+    try:
+        if solver == "explicit":
+            result = _solve_explicit(spec, stats, say, max_states, explain, name)
+        else:
+            from iterplan_compiler.synthesis.game import solve_symbolic
+
+            result = solve_symbolic(spec, stats, say, explain=explain, name=name, order=order)
+    except _explicit.StateExplosion as e:
+        msg = f"the game has too many states for the explicit solver ({e})"
+        return SynthesisResult(False, None, None, msg, stats, (error("S003", msg, problem.span),))
+    realizable, controller, explanation = result
+    if not realizable or controller is None:
+        return SynthesisResult(False, None, None, explanation, stats)
+    t1 = time.perf_counter()
+    if minimise:
+        controller = _minimise(controller)
+    controller = renamed(controller, f"{name}:controller" if name else "controller")
+    stats["controller_states"] = controller.num_states
+    stats["controller_transitions"] = controller.num_transitions
+    others = list(problem.plant[1:]) + (list(problem.safety) if _keeps_safety(problem) else [])
+    composition = _compose([controller, *others], name) if others else renamed(controller, name)
+    stats["composition_states"] = composition.num_states
+    stats["t_extract"] = stats.get("t_extract", 0.0) + time.perf_counter() - t1
+    return SynthesisResult(True, controller, composition, "", stats)
+
+
+def _keeps_safety(problem: SynthesisProblem) -> bool:
+    return not ("monolithicDirector" in problem.keywords and problem.nonblocking)
+
+
+def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
+                    max_states: int | None, explain: bool, name: str
+                    ) -> tuple[bool, LTS | None, str]:
+    t = time.perf_counter()
+    game = _explicit.build_game(spec, max_states=max_states)
+    stats["game_states"] = game.num_states
+    stats["game_transitions"] = sum(len(e) for e in game.edges)
+    stats["t_build"] = time.perf_counter() - t
+    say(f"explicit game: {game.num_states} states")
+    t = time.perf_counter()
+    alphabet = spec.plant_alphabet | _fluent_only_actions(spec)
+    if spec.mode == "nonblocking":
+        marked = game.guarantees[0]
+        region = nonblocking_region(game, marked)
+        stats["t_solve"] = time.perf_counter() - t
+        stats["winning_states"] = len(region)
+        if game.initial not in region:
+            return False, None, _explain(spec, game, region, explain)
+        t = time.perf_counter()
+        ctrl = extract_director(game, region, marked, name, alphabet)
+        stats["t_extract"] = time.perf_counter() - t
+        return True, ctrl, ""
+    ranks = _explicit.solve_ranks(game)
+    stats["t_solve"] = time.perf_counter() - t
+    win = frozenset(s for s in range(game.num_states) if ranks.winning(s))
+    stats["winning_states"] = len(win)
+    if not ranks.winning(game.initial):
+        return False, None, _explain(spec, game, win, explain)
+    t = time.perf_counter()
+    ctrl = extract_controller(game, ranks, name, alphabet)
+    stats["t_extract"] = time.perf_counter() - t
+    return True, ctrl, ""
+
+
+def _fluent_only_actions(spec: GameSpec) -> frozenset[str]:
+    """Actions only fluents mention (free moves of MTSA's game; kept in the alphabet)."""
+    return spec.alphabet - spec.plant_alphabet
+
+
+def _explain(spec: GameSpec, game: _explicit.ExplicitGame, win: frozenset[int],
+             explain: bool) -> str:
+    if not explain:
+        return "unrealizable: the initial state is not winning"
+    from iterplan_compiler.synthesis.explain import explain_losing
+
+    return explain_losing(spec, game, win)

@@ -1,0 +1,395 @@
+"""The MTSA game (§3.2–3.4) encoded with BDDs, and its symbolic solution.
+
+Encoding.  Component *k* (plant, safety machines, fluent monitors — see :mod:`encode`) gets
+``bits_for(n_k + e_k)`` current/next variable pairs, where ``e_k = 1`` if it has ERROR moves:
+code ``n_k`` then stands for its ERROR state.  The action is a binary index over the game
+alphabet (plus ``tau`` if some component has internal moves).  The transition relation is a
+conjunction of per-component relations — a component whose alphabet contains the action moves
+by its own relation, the others are framed (``s' = s``); ``tau`` interleaves — and any state in
+which some component is at its ERROR code has no successors (ERROR is a losing sink).
+
+Variable orders (``order``): ``"action_first"`` (action bits on top, then each component's
+bits with current/next interleaved — the default), ``"action_last"``, and ``"blocked"`` (all
+current bits, then all next bits; the textbook bad order, kept for the benchmark).
+
+Game (§3.3): ``Env(s) = ∃a,s'. T ∧ ¬ctrl(a)``;
+``CPre(X) = (Env ∧ ∀s'. Tu → X') ∨ (¬Env ∧ ∃s'. Tc ∧ X')`` with ``Tu``/``Tc`` the
+uncontrollable/controllable relations (action quantified out).  Dead ends satisfy neither
+disjunct, so they lose.  The winning region comes from :func:`fixpoint.gr1_winning`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from iterplan_compiler.ir.lts import ERROR, LTS, TAU
+from iterplan_compiler.symbolic.bdd import (
+    BitVec,
+    and_exists,
+    bits_for,
+    declare_interleaved,
+    new_manager,
+)
+from iterplan_compiler.synthesis.encode import GameSpec, evaluate
+from iterplan_compiler.synthesis.explicit import ExplicitGame, solve_ranks
+from iterplan_compiler.synthesis.fixpoint import gr1_winning
+from iterplan_compiler.synthesis.strategy import extract_controller, extract_director
+
+ORDERS = ("action_first", "action_last", "blocked")
+
+
+class SymbolicGame:
+    """BDD encoding of a :class:`GameSpec` (see the module docstring)."""
+
+    def __init__(self, spec: GameSpec, *, bdd: Any = None, order: str = "action_first") -> None:
+        if order not in ORDERS:
+            raise ValueError(f"unknown order {order!r}")
+        self.spec = spec
+        self.bdd = bdd if bdd is not None else new_manager()
+        b = self.bdd
+        comps = spec.components
+        self.has_tau = any(a == TAU for c in comps for _, a, _ in c.transitions)
+        self.actions = sorted(spec.alphabet) + ([TAU] if self.has_tau else [])
+        self.err_code = [c.num_states if c.has_error else None for c in comps]
+        widths = [bits_for(c.num_states + (1 if c.has_error else 0)) for c in comps]
+        aw = bits_for(len(self.actions))
+        self.cur: list[BitVec] = []
+        self.nxt: list[BitVec] = []
+        if order == "blocked":
+            cur_names = [tuple(f"s{k}_{i}" for i in range(w)) for k, w in enumerate(widths)]
+            nxt_names = [tuple(f"s{k}_{i}'" for i in range(w)) for k, w in enumerate(widths)]
+            b.declare(*[f"act_{i}" for i in range(aw)])
+            for names in cur_names:
+                b.declare(*names)
+            for names in nxt_names:
+                b.declare(*names)
+            self.cur = [BitVec(n) for n in cur_names]
+            self.nxt = [BitVec(n) for n in nxt_names]
+        else:
+            if order == "action_first":
+                b.declare(*[f"act_{i}" for i in range(aw)])
+            for k, w in enumerate(widths):
+                c, n = declare_interleaved(b, f"s{k}", w)
+                self.cur.append(c)
+                self.nxt.append(n)
+            if order == "action_last":
+                b.declare(*[f"act_{i}" for i in range(aw)])
+        self.act = BitVec(tuple(f"act_{i}" for i in range(aw)))
+        self.cur_vars = {v for vec in self.cur for v in vec.names}
+        self.nxt_vars = {v for vec in self.nxt for v in vec.names}
+        self.act_vars = set(self.act.names)
+        self.prime = {c: n for cv, nv in zip(self.cur, self.nxt, strict=True)
+                      for c, n in zip(cv.names, nv.names, strict=True)}
+        self.unprime = {n: c for c, n in self.prime.items()}
+        self._act_bdd = {a: self.act.eq(b, i) for i, a in enumerate(self.actions)}
+        self._build()
+
+    # -- construction -------------------------------------------------------------------
+
+    def _frame(self, k: int) -> Any:
+        return self.cur[k].equal_to(self.bdd, self.nxt[k])
+
+    def _component_relation(self, k: int, c: LTS, labels: set[str]) -> dict[str, Any]:
+        """``{label: R(s_k, s_k')}`` for the given labels of component ``k``."""
+        b = self.bdd
+        rel: dict[str, Any] = {}
+        cur, nxt = self.cur[k], self.nxt[k]
+        err = self.err_code[k]
+        src_cache: dict[int, Any] = {}
+        dst_cache: dict[int, Any] = {}
+        for s, a, t in c.transitions:
+            if a not in labels:
+                continue
+            t_code = err if t == ERROR else t
+            if s not in src_cache:
+                src_cache[s] = cur.eq(b, s)
+            if t_code not in dst_cache:
+                dst_cache[t_code] = nxt.eq(b, t_code)
+            rel[a] = rel.get(a, b.false) | (src_cache[s] & dst_cache[t_code])
+        return rel
+
+    def _build(self) -> None:
+        b = self.bdd
+        spec = self.spec
+        comps = spec.components
+        ctrl = spec.controllable
+        T = b.true
+        valid = b.true
+        err = b.false
+        init = b.true
+        tau_moves = b.false
+        for k, c in enumerate(comps):
+            codes = c.num_states + (1 if c.has_error else 0)
+            valid &= self.cur[k].less_than(b, codes)
+            init &= self.cur[k].eq(b, c.initial)
+            if self.err_code[k] is not None:
+                err |= self.cur[k].eq(b, self.err_code[k])
+            rel = self._component_relation(k, c, set(c.alphabet) | {TAU})
+            own = b.false
+            Tk = b.false
+            for a in c.alphabet:
+                own |= self._act_bdd[a]
+                Tk |= self._act_bdd[a] & rel.get(a, b.false)
+            # actions outside the component's alphabet (and tau, handled below) frame it
+            Tk |= ~own & self._frame(k)
+            T &= Tk
+            if TAU in rel:
+                others = b.true
+                for m in range(len(comps)):
+                    if m != k:
+                        others &= self._frame(m)
+                tau_moves |= rel[TAU] & others
+        if self.has_tau:
+            tau = self._act_bdd[TAU]
+            T = (T & ~tau) | (tau & tau_moves)
+        any_action = b.false
+        for a in self.actions:
+            any_action |= self._act_bdd[a]
+        self.valid = valid
+        self.error = err & valid
+        self.init = init
+        self.trans = T & any_action & valid & ~err
+        unc = b.false
+        ctl = b.false
+        for a in self.actions:
+            if a in ctrl:
+                ctl |= self._act_bdd[a]
+            else:
+                unc |= self._act_bdd[a]
+        self.unc_actions, self.ctrl_actions = unc, ctl
+        self.tu = b.exist(self.act_vars, self.trans & unc)
+        self.tc = b.exist(self.act_vars, self.trans & ctl)
+        self.env = b.exist(self.nxt_vars, self.tu)
+        self.t_any = self.tu | self.tc
+        # goal sets over fluent-monitor bits
+        nbody = spec.num_plant + spec.num_safety
+        val = {name: b.var(self.cur[nbody + i].names[0])
+               for i, name in enumerate(spec.fluent_names)}
+
+        def sets(formulas: tuple) -> list[Any]:
+            return [evaluate(f, val, true=b.true, false=b.false, neg=lambda x: ~x) & ~err
+                    for f in formulas]
+
+        self.assumptions = sets(spec.assumptions)
+        self.guarantees = sets(spec.guarantees)
+        fs = sets(spec.failures)
+        self.failures = b.false
+        for f in fs:
+            self.failures |= f
+
+    # -- operators ----------------------------------------------------------------------
+
+    def to_next(self, u: Any) -> Any:
+        return self.bdd.let(self.prime, u)
+
+    def to_cur(self, u: Any) -> Any:
+        return self.bdd.let(self.unprime, u)
+
+    def cpre(self, X: Any) -> Any:
+        """Controllable predecessor of §3.4 (dead ends never belong to it)."""
+        b = self.bdd
+        xn = self.to_next(X)
+        env_bad = and_exists(b, self.tu, ~xn, self.nxt_vars)
+        ctrl_good = and_exists(b, self.tc, xn, self.nxt_vars)
+        return (self.env & ~env_bad) | (~self.env & ctrl_good)
+
+    def post(self, X: Any) -> Any:
+        return self.to_cur(and_exists(self.bdd, self.t_any, X, self.cur_vars))
+
+    def pre_any(self, X: Any) -> Any:
+        return and_exists(self.bdd, self.t_any, self.to_next(X), self.nxt_vars)
+
+    def reachable(self) -> Any:
+        R = self.init
+        frontier = self.init
+        while frontier != self.bdd.false:
+            img = self.post(frontier)
+            frontier = img & ~R
+            R |= frontier
+        return R
+
+    def count(self, u: Any) -> int:
+        return int(self.bdd.count(u, nvars=len(self.cur_vars))) if u != self.bdd.false else 0
+
+    def decode(self, assignment: dict[str, bool], vecs: list[BitVec]) -> tuple[int, ...]:
+        return tuple(v.decode(assignment) for v in vecs)
+
+    def state_cube(self, tup: tuple[int, ...]) -> Any:
+        u = self.bdd.true
+        for vec, val in zip(self.cur, tup, strict=True):
+            u &= vec.eq(self.bdd, val)
+        return u
+
+    def successors(self, tup: tuple[int, ...]) -> list[tuple[str, tuple[int, ...] | None]]:
+        """Explicit successors ``(label, next tuple or None for ERROR)`` of a state."""
+        b = self.bdd
+        u = self.trans & self.state_cube(tup)
+        u = b.exist(self.cur_vars, u)
+        care = self.act_vars | self.nxt_vars
+        out = []
+        for asg in b.pick_iter(u, care_vars=care):
+            a = self.actions[self.act.decode(asg)]
+            nt = self.decode(asg, self.nxt)
+            is_err = any(e is not None and nt[k] == e for k, e in enumerate(self.err_code))
+            out.append((a, None if is_err else nt))
+        return sorted(set(out), key=lambda x: (x[0], x[1] or ()))
+
+    def fluent_values(self, tup: tuple[int, ...]) -> dict[str, bool]:
+        nbody = self.spec.num_plant + self.spec.num_safety
+        return {name: tup[nbody + i] == 1 for i, name in enumerate(self.spec.fluent_names)}
+
+
+def subgame(g: SymbolicGame, region: Any, *, limit: int | None = None) -> ExplicitGame:
+    """The explicit game on the states reachable from the initial state through ``region``.
+
+    Edges leaving ``region`` go to one sink (no successors; the ERROR slot), so the ranks of
+    region states are those of the full game.
+    """
+    b = g.bdd
+    spec = g.spec
+    start = next(iter(b.pick_iter(g.init, care_vars=g.cur_vars)))
+    t0 = g.decode(start, g.cur)
+    index = {t0: 0}
+    tuples: list[tuple[int, ...] | None] = [t0]
+    raw: list[list[tuple[str, tuple[int, ...] | None]]] = []
+    q = deque([t0])
+    sink_needed = False
+    inside: list[bool] = []
+    while q:
+        tup = q.popleft()
+        cube = g.state_cube(tup)
+        ok = (cube & region) != b.false
+        inside.append(ok)
+        succ = g.successors(tup) if ok else []
+        raw.append(succ)
+        for _, nt in succ:
+            if nt is None:
+                sink_needed = True
+            elif nt not in index:
+                index[nt] = len(tuples)
+                tuples.append(nt)
+                q.append(nt)
+                if limit is not None and len(tuples) > limit:
+                    raise MemoryError(f"subgame larger than {limit} states")
+    n = len(tuples)
+    sink = n if sink_needed else None
+    edges: list[list[tuple[str, int]]] = []
+    for succ in raw:
+        edges.append([(a, sink if nt is None else index[nt]) for a, nt in succ])  # type: ignore[misc]
+    if sink is not None:
+        tuples.append(None)
+        edges.append([])
+    total = len(edges)
+    ctrl = spec.controllable
+    env = [any(a not in ctrl for a, _ in edges[s]) for s in range(total)]
+    vals = [g.fluent_values(t) if t is not None else None for t in tuples]
+
+    def sets(formulas: tuple) -> list[frozenset[int]]:
+        return [frozenset(s for s in range(n) if vals[s] is not None and inside[s]
+                          and evaluate(f, vals[s])) for f in formulas]
+
+    everything = frozenset(range(n))
+    A = sets(spec.assumptions) or [everything]
+    G = sets(spec.guarantees) or [everything]
+    fs = sets(spec.failures)
+    F = frozenset().union(*fs) if fs else frozenset()
+    game = ExplicitGame(total, 0, edges, env, ctrl, A, G, F, spec.alphabet, tuples, sink,
+                        spec.mode)
+    game.inside = inside  # type: ignore[attr-defined]
+    return game
+
+
+def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
+    """``νZ. CoReach_Z(marked)`` restricted to safe states (see strategy.nonblocking_region)."""
+    Z = care & ~g.error
+    while True:
+        safe = Z & g.cpre(Z)
+        co = marked & safe
+        while True:
+            nco = co | (safe & g.pre_any(co))
+            if nco == co:
+                break
+            co = nco
+        if co == Z:
+            return Z
+        Z = co
+
+
+def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
+                   explain: bool, name: str, order: str = "action_first"
+                   ) -> tuple[bool, LTS | None, str]:
+    """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why)."""
+    t = time.perf_counter()
+    g = SymbolicGame(spec, order=order)
+    stats["bdd_backend"] = type(g.bdd).__module__
+    stats["order"] = order
+    stats["t_encode"] = time.perf_counter() - t
+    t = time.perf_counter()
+    reach = g.reachable()
+    stats["t_reach"] = time.perf_counter() - t
+    live = reach & ~g.error
+    stats["game_states"] = g.count(live) + (1 if (reach & g.error) != g.bdd.false else 0)
+    stats["trans_bdd_nodes"] = len(g.trans)
+    stats["bdd_vars"] = len(g.bdd.vars)
+    say(f"symbolic game: {stats['game_states']} reachable states, |T| = {len(g.trans)} nodes")
+    t = time.perf_counter()
+    alphabet = spec.alphabet
+    if spec.mode == "nonblocking":
+        marked = g.guarantees[0] & reach
+        W = nonblocking_symbolic(g, reach, marked)
+        stats["t_solve"] = time.perf_counter() - t
+        stats["winning_states"] = g.count(W)
+        if (g.init & W) == g.bdd.false:
+            return False, None, _explain_symbolic(g, reach, W, explain)
+        t = time.perf_counter()
+        game = subgame(g, W)
+        region = frozenset(s for s in range(game.num_states) if game.inside[s])  # type: ignore[attr-defined]
+        ctrl = extract_director(game, region, game.guarantees[0], name, alphabet)
+        stats["t_extract"] = time.perf_counter() - t
+        return True, ctrl, ""
+    goals = [gj | g.failures for gj in (g.guarantees or [g.bdd.true & ~g.error])]
+    fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach, must_contain=g.init,
+                     progress=say)
+    W = fp.winning & reach
+    stats["t_solve"] = time.perf_counter() - t
+    stats["fixpoint_iterations"] = fp.iterations
+    stats["winning_bdd_nodes"] = len(W)
+    if (g.init & W) == g.bdd.false:
+        return False, None, _explain_symbolic(g, reach, W, explain)
+    stats["winning_states"] = g.count(W)
+    t = time.perf_counter()
+    game = subgame(g, W)
+    # H_j over the full reachable game, as MTSA computes it (§3.5)
+    A = g.assumptions or [live]
+    heights = []
+    for gj in goals:
+        heights.append(1 + max(g.count(a & live & ~gj) for a in A))
+    ranks = solve_ranks(game, candidates=lambda s: game.inside[s],  # type: ignore[attr-defined]
+                        heights=heights)
+    if not ranks.winning(game.initial):  # pragma: no cover - would be a solver bug
+        raise AssertionError("symbolic and rank solvers disagree on the initial state")
+    ctrl = extract_controller(game, ranks, name, alphabet)
+    stats["t_extract"] = time.perf_counter() - t
+    return True, ctrl, ""
+
+
+def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool) -> str:
+    losing = g.count(reach & ~W & ~g.error)
+    head = (f"unrealizable: the initial state is losing ({losing} reachable non-ERROR game "
+            f"states are losing)")
+    if not explain:
+        return head
+    if g.count(reach) > 50_000:
+        return head + "\n(game too large for a counter-strategy trace; try a smaller instance)"
+    from iterplan_compiler.synthesis.explain import explain_losing
+    from iterplan_compiler.synthesis.explicit import build_game
+
+    game = build_game(g.spec)
+    win = set()
+    for s, tup in enumerate(game.tuples):
+        if tup is not None and (g.state_cube(tup) & W) != g.bdd.false:
+            win.add(s)
+    return explain_losing(g.spec, game, frozenset(win))

@@ -1,0 +1,167 @@
+"""FLTL model checking: hand-written systems and agreement with the direct evaluator."""
+
+from fltl_helpers import FLUENTS, act, fl, formulas, is_run, lasso_runs, lassos, total_lts
+from hypothesis import HealthCheck, given, settings
+
+from iterplan_compiler.fltl.check import Counterexample, check_assert, model_check
+from iterplan_compiler.fltl.semantics import Lasso, evaluate, is_good_prefix
+from iterplan_compiler.ir.formulas import (
+    Always,
+    And,
+    Eventually,
+    FluentProp,
+    Implies,
+    NamedFormula,
+    Next,
+    Not,
+    Or,
+    Until,
+    WeakUntil,
+)
+from iterplan_compiler.ir.lts import ERROR, TAU, make_lts
+
+SETTINGS = settings(max_examples=80, deadline=None,
+                    suppress_health_check=[HealthCheck.too_slow])
+
+# P = (a -> b -> P | a -> c -> P)
+CHOICE = make_lts("P", 3, [(0, "a", 1), (1, "b", 0), (0, "a", 2), (2, "c", 0)])
+
+
+def holds(lts, f, fluents=None):
+    return model_check(lts, f, fluents or {}).holds
+
+
+def test_liveness_with_cycles():
+    assert holds(CHOICE, Always(Eventually(act("a"))))
+    res = model_check(CHOICE, Always(Eventually(act("b"))), {})
+    assert not res.holds
+    cex = res.counterexample
+    assert cex.cycle and "b" not in cex.cycle  # the a-c loop starves b
+    assert is_run(CHOICE, cex.prefix, cex.cycle)
+    assert not evaluate(Always(Eventually(act("b"))), Lasso(cex.prefix, cex.cycle), {})
+    assert not holds(CHOICE, Eventually(Always(act("a"))))
+    assert holds(CHOICE, Always(Eventually(Or(act("b"), act("c")))))
+
+
+def test_safety_and_next():
+    assert holds(CHOICE, Always(Implies(act("a"), Next(Or(act("b"), act("c"))))))
+    assert not holds(CHOICE, Always(Implies(act("a"), Next(act("b")))))
+    assert not holds(CHOICE, Always(Not(act("c"))))
+    assert holds(CHOICE, act("a"))  # position 1 is after the first action
+    assert not holds(CHOICE, Next(act("b")))
+    assert holds(CHOICE, Until(act("a"), Or(act("b"), act("c"))))
+    # "a c ..." shows c before any b:
+    assert not holds(CHOICE, WeakUntil(Not(act("c")), act("b")))
+    assert holds(CHOICE, WeakUntil(Not(act("c")), Or(act("b"), act("c"))))
+
+
+def test_fluent_liveness_mutex():
+    # Two users alternate through a lock; fluent Crit1 = <enter1, exit1>.
+    sys_ = make_lts("M", 4, [(0, "enter1", 1), (1, "exit1", 2), (2, "enter2", 3),
+                             (3, "exit2", 0)])
+    fluents = {"C1": fl("C1", {"enter1"}, {"exit1"}), "C2": fl("C2", {"enter2"}, {"exit2"})}
+    c1, c2 = FluentProp("C1"), FluentProp("C2")
+    assert holds(sys_, Always(Not(And(c1, c2))), fluents)
+    assert holds(sys_, Always(Eventually(c1)), fluents)
+    assert holds(sys_, Always(Implies(c1, Eventually(c2))), fluents)
+    assert not holds(sys_, Eventually(Always(c1)), fluents)
+    # A system that may stay in user 1's critical section forever (a work loop).
+    loop = make_lts("L", 4, [(0, "enter1", 1), (1, "work", 1), (1, "exit1", 2),
+                             (2, "enter2", 3), (3, "exit2", 0)])
+    res = model_check(loop, Always(Eventually(c2)), fluents)
+    assert not res.holds and res.counterexample.cycle == ("work",)
+
+
+def test_deadlock_is_not_a_liveness_counterexample_but_safety_is_checked():
+    stop = make_lts("S", 2, [(0, "a", 1)])  # a -> STOP
+    res = model_check(stop, Always(Eventually(act("b"))), {})
+    assert res.holds and res.deadlocks == 1
+    res = model_check(stop, Always(Not(act("a"))), {})
+    assert not res.holds and res.counterexample.prefix == ("a",)
+    assert res.counterexample.cycle == ()
+    # "a" alone is not a bad prefix of [](a -> X b): b could still follow.
+    assert holds(stop, Always(Implies(act("a"), Next(act("b")))))
+    # END states are finite runs too.
+    end = make_lts("E", 2, [(0, "a", 1)], end_states=[1])
+    assert holds(end, Always(Eventually(act("b"))))
+
+
+def test_error_moves_end_the_run():
+    err = make_lts("X", 1, [(0, "a", 0), (0, "b", ERROR)])
+    # The run "b" stops in ERROR; it is a finite run, and a bad prefix of [] a.
+    res = model_check(err, Always(act("a")), {})
+    assert not res.holds and res.counterexample == Counterexample(("b",), ())
+    # ... but not a liveness counterexample.
+    assert holds(err, Always(Eventually(act("a"))))
+
+
+def test_tau_is_not_a_position():
+    # (a -> tau -> b -> P): the hidden step does not break "a is followed by b".
+    hidden = make_lts("H", 3, [(0, "a", 1), (1, TAU, 2), (2, "b", 0)])
+    assert holds(hidden, Always(Implies(act("a"), Next(act("b")))))
+    # A tau-divergence after a is a finite visible run: no liveness violation.
+    div = make_lts("D", 2, [(0, "a", 1), (1, TAU, 1)])
+    assert holds(div, Always(Eventually(act("b"))))
+
+
+def test_actions_outside_the_formula_are_positions():
+    sys_ = make_lts("Z", 3, [(0, "a", 1), (1, "z", 2), (2, "b", 0)])
+    res = model_check(sys_, Always(Implies(act("a"), Next(act("b")))), {})
+    assert not res.holds
+    assert res.counterexample.prefix[:2] == ("a", "z") or "z" in res.counterexample.cycle
+
+
+def test_unknown_fluent_is_a_diagnostic():
+    res, diags = check_assert(CHOICE, NamedFormula("A", "assert", FluentProp("Nope")), {})
+    assert res is None and [d.code for d in diags] == ["E301"]
+
+
+def _chain(lasso: Lasso):
+    """A deterministic LTS whose only run is the lasso."""
+    word = lasso.prefix + lasso.cycle
+    n = len(word)
+    trans = [(i, a, i + 1) for i, a in enumerate(word[:-1])]
+    trans.append((n - 1, word[-1], len(lasso.prefix)))
+    return make_lts("W", n, trans)
+
+
+@SETTINGS
+@given(formulas, lassos)
+def test_single_run_system_agrees_with_evaluator(formula, lasso):
+    res = model_check(_chain(lasso), formula, FLUENTS)
+    assert res.holds == evaluate(formula, lasso, FLUENTS)
+    if not res.holds:
+        cex = res.counterexample
+        assert cex.cycle  # the system never deadlocks
+        assert not evaluate(formula, Lasso(cex.prefix, cex.cycle), FLUENTS)
+
+
+@SETTINGS
+@given(total_lts(), formulas)
+def test_random_systems_agree_with_brute_force(lts, formula):
+    res = model_check(lts, formula, FLUENTS)
+    brute = [r for r in lasso_runs(lts, 6)
+             if not evaluate(formula, Lasso(r[0], r[1]), FLUENTS)]
+    if res.holds:
+        assert brute == []
+    else:
+        cex = res.counterexample
+        assert cex.cycle and is_run(lts, cex.prefix, cex.cycle)
+        assert not evaluate(formula, Lasso(cex.prefix, cex.cycle), FLUENTS)
+        if len(cex.prefix) + len(cex.cycle) <= 3:
+            assert brute  # a short counterexample is within the brute-force bound
+
+
+@SETTINGS
+@given(total_lts(max_states=3), formulas)
+def test_deadlocking_systems_report_only_bad_prefixes(lts, formula):
+    # Remove every move of one reachable state: it becomes a deadlock.
+    dead = max(t for _, _, t in lts.transitions)
+    cut = make_lts("C", lts.num_states, [t for t in lts.transitions if t[0] != dead],
+                   lts.alphabet)
+    res = model_check(cut, formula, FLUENTS)
+    if not res.holds and not res.counterexample.cycle:
+        cex = res.counterexample
+        assert is_run(cut, cex.prefix, ())
+        letters = {"a", "b", "c", "z"}
+        assert not is_good_prefix(formula, cex.prefix, FLUENTS, letters, bound=3)

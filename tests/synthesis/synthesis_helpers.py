@@ -1,0 +1,27 @@
+"""Hand-made synthesis problems for the tests (no front-end needed)."""
+
+from __future__ import annotations
+
+from iterplan_compiler.ir.formulas import Fluent, FluentProp, Formula
+from iterplan_compiler.ir.lts import LTS
+from iterplan_compiler.ir.model import SynthesisProblem
+
+
+def problem(plant: tuple[LTS, ...] | LTS, *, controllable: set[str], fluents=(),
+            guarantees: tuple[Formula, ...] = (), assumptions: tuple[Formula, ...] = (),
+            failures: tuple[Formula, ...] = (), safety: tuple[LTS, ...] = (),
+            keywords=("controller",), marking=None, nonblocking=False) -> SynthesisProblem:
+    if isinstance(plant, LTS):
+        plant = (plant,)
+    return SynthesisProblem("C", frozenset(keywords), tuple(plant), tuple(safety),
+                            tuple(assumptions), tuple(guarantees), tuple(failures),
+                            tuple(fluents), frozenset(controllable),
+                            frozenset(marking) if marking is not None else None, nonblocking)
+
+
+def fl(name: str, init: set[str], term: set[str], initially: bool = False) -> Fluent:
+    return Fluent(name, frozenset(init), frozenset(term), initially)
+
+
+def F(name: str) -> FluentProp:
+    return FluentProp(name)
