@@ -139,6 +139,7 @@ def check_row(root: Path, row: Row) -> RowResult:
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
         status, detail = "crash", f"{type(exc).__name__}: {exc}{where}"
+    detail = detail.strip().splitlines()[0] if detail.strip() else ""
     return RowResult(row.file, row.kind, status, detail, time.perf_counter() - start)
 
 
@@ -281,16 +282,115 @@ def _run_isolated(root: Path, row: Row, timeout: float) -> RowResult:
     return RowResult(row.file, row.kind, "crash", f"exit {proc.returncode}: {tail}", elapsed)
 
 
+def _warm_up(root: Path) -> None:
+    """Import the pipeline and build the parser once, before forking row workers.
+
+    Forked children inherit the warm interpreter, so a row costs its own work only, not
+    seconds of imports and LALR table construction.
+    """
+    import importlib
+
+    for mod in ("iterplan_compiler.frontend", "iterplan_compiler.synthesis.driver",
+                "iterplan_compiler.fltl.check", "iterplan_compiler.ir.minimise"):
+        try:
+            importlib.import_module(mod)
+        except ImportError:
+            pass
+    try:
+        from iterplan_compiler import frontend
+
+        frontend.load(root / "warm-up.lts", text="A = (a -> A).\n")
+    except Exception:  # warming up is an optimisation only
+        pass
+
+
+def _child(conn, root: Path, row: Row) -> None:
+    res = check_row(root, row)
+    conn.send(asdict(res))
+    conn.close()
+
+
 def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
                budget: float | None = None,
                on_result: Callable[[RowResult], None] | None = None) -> list[RowResult]:
-    """Check every row (``jobs`` rows at a time), calling ``on_result`` as each finishes.
+    """Check every row, ``jobs`` at a time, each in a child process; call ``on_result`` as
+    each finishes.
 
-    ``budget`` bounds the whole run in wall seconds: a row not started when it is spent is
-    reported as ``timeout`` ("budget exhausted") without running.  Results come back in the
-    order of ``rows`` (put the rows that matter most first).
+    Children are forked from a warmed-up parent where ``fork`` exists (else spawned fresh
+    interpreters run ``--one``).  A child that exceeds ``timeout`` is killed (``timeout``); one
+    that dies without a result is a ``crash``.  ``budget`` bounds the whole run in wall
+    seconds: a row not started when it is spent is reported as ``timeout`` ("budget
+    exhausted").  Results come back in the order of ``rows`` (put the rows that matter most
+    first).
     """
+    import multiprocessing as mp
+    from multiprocessing.connection import wait
+
     rows = list(rows)
+    if "fork" not in mp.get_all_start_methods():
+        return _run_spawned(root, rows, jobs=jobs, timeout=timeout, budget=budget,
+                            on_result=on_result)
+    _warm_up(root)
+    ctx = mp.get_context("fork")
+    results: list[RowResult | None] = [None] * len(rows)
+    deadline = None if budget is None else time.monotonic() + budget
+    pending = list(range(len(rows)))
+    running: dict[object, tuple[int, object, float]] = {}  # conn -> (index, process, start)
+
+    def finish(i: int, res: RowResult) -> None:
+        results[i] = res
+        if on_result is not None:
+            on_result(res)
+
+    while pending or running:
+        while pending and len(running) < max(1, jobs):
+            i = pending.pop(0)
+            row = rows[i]
+            if deadline is not None and time.monotonic() > deadline:
+                finish(i, RowResult(row.file, row.kind, "timeout", "budget exhausted", 0.0))
+                continue
+            recv, send = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_child, args=(send, root, row), daemon=True)
+            proc.start()
+            send.close()
+            running[recv] = (i, proc, time.monotonic())
+        if not running:
+            continue
+        now = time.monotonic()
+        next_expiry = min(start + timeout for _, _, start in running.values())
+        ready = wait(list(running), timeout=max(0.0, next_expiry - now))
+        for conn in ready:
+            i, proc, start = running.pop(conn)
+            row = rows[i]
+            try:
+                data = conn.recv()
+                res = RowResult(**data)
+            except (EOFError, OSError, TypeError):
+                proc.join(5)
+                res = RowResult(row.file, row.kind, "crash",
+                                f"worker died (exit {proc.exitcode})",
+                                time.monotonic() - start)
+            conn.close()
+            proc.join(5)
+            finish(i, res)
+        now = time.monotonic()
+        for conn, (i, proc, start) in list(running.items()):
+            if now - start >= timeout:
+                proc.kill()
+                proc.join(5)
+                conn.close()
+                del running[conn]
+                row = rows[i]
+                finish(i, RowResult(row.file, row.kind, "timeout", f"> {timeout:g} s", timeout))
+    return [r for r in results if r is not None]
+
+
+def _run_spawned(root: Path, rows: list[Row], *, jobs: int, timeout: float,
+                 budget: float | None,
+                 on_result: Callable[[RowResult], None] | None) -> list[RowResult]:
+    """Fallback without ``fork``: one fresh interpreter per row (slower start-up)."""
+    from concurrent.futures import as_completed
+
     results: list[RowResult | None] = [None] * len(rows)
     deadline = None if budget is None else time.monotonic() + budget
 
@@ -301,18 +401,12 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         futures = {pool.submit(work, row): i for i, row in enumerate(rows)}
-        for fut in _as_completed(futures):
+        for fut in as_completed(futures):
             res = fut.result()
             results[futures[fut]] = res
             if on_result is not None:
                 on_result(res)
     return [r for r in results if r is not None]
-
-
-def _as_completed(futures):
-    from concurrent.futures import as_completed
-
-    return as_completed(futures)
 
 
 def read_baseline(path: Path) -> dict[str, str]:

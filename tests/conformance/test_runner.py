@@ -70,3 +70,39 @@ def test_isolated_run_reports_rows_not_in_the_table(tmp_path: Path):
                                            encoding="utf-8")
     res = conf._run_isolated(tmp_path, _row(file="nope.lts"), timeout=60)
     assert res.status == "error" and "not in verdicts.tsv" in res.detail
+
+
+def _corpus(tmp_path: Path) -> Path:
+    (tmp_path / "ok.lts").write_text("A = (a -> b -> A).\n||C = (A).\n", encoding="utf-8")
+    (tmp_path / "bad.lts").write_text("A = (a -> B).\n||C = (A || Missing).\n",
+                                      encoding="utf-8")
+    (tmp_path / "rec.lts").write_text("||C = (D).\n||D = (C).\n", encoding="utf-8")
+    (tmp_path / "alpha.lts").write_text("A = (a -> b -> A)\\{b}.\n||C = (A).\n",
+                                        encoding="utf-8")
+    (tmp_path / "verdicts.tsv").write_text(
+        "file\texpected\tcomposite\tkeywords\tchecks\n"
+        "ok.lts\tcompiles\tC\tplain composite\t\n"
+        "bad.lts\tcompiles\tC\tplain composite\t\n"
+        "rec.lts\terror: recursive composition\tC\tplain composite\t\n"
+        "alpha.lts\talphabet check\tC\tplain composite\tequals, in this order: [a] (x)\n",
+        encoding="utf-8")
+    return tmp_path
+
+
+def test_corpus_run_gives_each_row_its_status(tmp_path: Path):
+    root = _corpus(tmp_path)
+    seen = []
+    results = conf.run_corpus(root, conf.read_rows(root), jobs=2, timeout=60,
+                              on_result=seen.append)
+    status = {r.file: r.status for r in results}
+    assert status == {"ok.lts": "pass", "bad.lts": "error", "rec.lts": "pass",
+                      "alpha.lts": "pass"}
+    assert [r.file for r in results] == ["ok.lts", "bad.lts", "rec.lts", "alpha.lts"]
+    assert len(seen) == 4
+
+
+def test_exhausted_budget_reports_timeouts_without_running(tmp_path: Path):
+    root = _corpus(tmp_path)
+    results = conf.run_corpus(root, conf.read_rows(root), jobs=1, timeout=60, budget=-1)
+    assert {r.status for r in results} == {"timeout"}
+    assert all(r.detail == "budget exhausted" for r in results)
