@@ -43,7 +43,6 @@ from specbuild import (  # noqa: E402
     bits_needed,
     iff,
     implies,
-    vec,
     vec_eq,
 )
 

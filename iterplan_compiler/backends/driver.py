@@ -21,7 +21,15 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePath
 from typing import Any
 
-from iterplan_compiler.diagnostics import NO_SPAN, Diagnostic, Related, Span, error, has_errors
+from iterplan_compiler.diagnostics import (
+    NO_SPAN,
+    Diagnostic,
+    Related,
+    Span,
+    error,
+    has_errors,
+    warning,
+)
 from iterplan_compiler.ir.lts import LTS, reachable
 
 #: ``--emit`` choices of ``iterc compile``.
@@ -33,6 +41,7 @@ E_NO_COMPOSITE = "E502"   # no controller composite in the file / the named one 
 E_NOT_EMITTABLE = "E503"  # synthesis returned something that is not a deterministic controller
 E_UNKNOWN_NAME = "E504"   # `iterc dot SPEC NAME`: NAME is not defined
 E_NO_LTS = "E505"         # the model built no LTS for NAME and said nothing (should not happen)
+W_SYNTHESIS = "W501"      # a warning synthesis reported while posing the game
 
 
 @dataclass(frozen=True)
@@ -73,7 +82,9 @@ def _sources(model: Any, path: str | Path, text: str | None) -> dict[str, str]:
         src = text
     if src is None:
         try:
-            src = Path(path).read_text(encoding="utf-8")
+            # Same decoding as the front-end (bad bytes become U+FFFD, which the lexer then
+            # reports with a position) so the caret lines up and non-UTF-8 input never raises.
+            src = Path(path).read_text(encoding="utf-8", errors="replace")
         except OSError:
             return {}
     key = str(getattr(model, "source_path", None) or path)
@@ -143,6 +154,9 @@ def synthesize_composite(
     result = _synthesize(problem, solver, progress)
     posed = list(getattr(result, "diagnostics", ()) or ())
     diags.extend(posed)
+    # Modelling pitfalls synthesis noticed (e.g. fluent actions outside the plant) are strings.
+    for text in (getattr(result, "stats", None) or {}).get("warnings", ()):
+        diags.append(warning(W_SYNTHESIS, str(text), problem.span))
     if not result.realizable and not has_errors(posed):
         why = (result.explanation or "").strip()
         msg = f"no controller exists for '{composite}': the specification is unrealizable"

@@ -2,7 +2,12 @@
 
 With ``--build`` every process and composite is also built (composed, synthesised when a
 synthesis keyword asks for it), which finds errors that only show when a machine is built.
-Exit code 0 if there are no errors (warnings are printed), 1 otherwise.
+With ``--print`` the parsed file is printed back as canonical FSP on stdout (the printer of
+``frontend/printer.py``; parsing the output gives the same syntax tree), and with
+``--legality NAME`` MTSA's legality check is run on composite NAME (machine 0 is the
+controller, machine 1 the plant).
+Exit code 0 if there are no errors (warnings are printed) and the legality check (if asked)
+passes, 1 otherwise.
 """
 
 from __future__ import annotations
@@ -20,11 +25,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--build", action="store_true",
                         help="also build every process and composite")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print warnings")
+    parser.add_argument("--print", dest="print_fsp", action="store_true",
+                        help="print the file back as canonical FSP (includes not expanded)")
+    parser.add_argument("--legality", metavar="COMPOSITE",
+                        help="check that machine 0 of COMPOSITE never blocks an uncontrollable "
+                        "action of machine 1 (MTSA's LegalityAnalyser)")
 
 
 def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.frontend import load, parse_file
 
+    if getattr(args, "print_fsp", False):
+        return _print(args.spec)
     model, diags = load(args.spec)
     if model is not None and args.build:
         for name in model.names():
@@ -39,7 +51,31 @@ def run(args: argparse.Namespace) -> int:
         print(f"{args.spec}: {n} error(s)", file=sys.stderr)
         return 1
     assert model is not None
+    if getattr(args, "legality", None):
+        legal, detail = model.legality(args.legality)
+        print(f"{args.legality}: {detail}")
+        if not legal:
+            return 1
     print(f"{args.spec}: ok ({len(model.processes)} processes, {len(model.composites)} "
           f"composites, {len(model.fluents)} fluents, {len(model.formulas)} formulas, "
           f"{len(model.controller_specs)} controller specs)")
+    return 0
+
+
+def _print(path: str) -> int:
+    from pathlib import Path
+
+    from iterplan_compiler.frontend.parse import parse_text
+    from iterplan_compiler.frontend.printer import print_spec
+
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        print(f"{path}: cannot read: {e.strerror or e}", file=sys.stderr)
+        return 1
+    spec, diags = parse_text(text, path)
+    if has_errors(diags):
+        print(render(diags, {path: text}), file=sys.stderr)
+        return 1
+    sys.stdout.write(print_spec(spec))
     return 0

@@ -43,9 +43,6 @@ def run(args: argparse.Namespace) -> int:
     kind = args.emit
     if kind is None:
         kind = _SUFFIX_KIND.get(Path(args.output).suffix.lower(), "py") if args.output else "py"
-    if not Path(args.spec).is_file():
-        print(f"iterc compile: no such file: {args.spec}", file=sys.stderr)
-        return 2
     out = compile_spec(args.spec, composite=args.composite, emit_kind=kind, solver=args.solver)
     if out.diagnostics:
         print(render(out.diagnostics, out.sources), file=sys.stderr)

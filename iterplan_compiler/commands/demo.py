@@ -52,8 +52,6 @@ def run(args: argparse.Namespace) -> int:
         return 1
     shown = ("game_states", "controller_states", "controller_transitions")
     extra = ", ".join(f"{k.replace('_', ' ')} {stats[k]}" for k in shown if k in stats)
-    if stats.get("cached"):
-        extra = "reused: same spec"
     _say(f"      controller written to {module}" + (f"  ({extra})" if extra else ""))
 
     _say(f"[2/3] flying it on the built-in simulator (sorter: {args.sorter})")

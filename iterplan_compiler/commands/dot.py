@@ -39,9 +39,6 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.backends.graphviz import RENDER_FORMATS, GraphvizError, to_dot
     from iterplan_compiler.backends.graphviz import render as draw
 
-    if not Path(args.spec).is_file():
-        print(f"iterc dot: no such file: {args.spec}", file=sys.stderr)
-        return 2
     if args.output:
         suffix = Path(args.output).suffix.lower()
         if suffix not in (".dot", ".gv", *RENDER_FORMATS):

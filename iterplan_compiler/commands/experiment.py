@@ -12,12 +12,13 @@ Writes ``<out>/<exp>.csv`` (one row per simulated mission), ``<out>/<exp>_summar
 from __future__ import annotations
 
 import argparse
+import csv
 import os
 import sys
 from pathlib import Path
 
 HELP = "reproduce the paper's Fig. 3 experiments"
-CHOICES = ("fig3b", "fig3c", "fig3d", "synthesis-table", "all")
+CHOICES = ("fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table", "all")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,6 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="runs per point (default: the paper's: 30 for fig3b, 6 for Cover)")
     parser.add_argument("--sorters", default=None,
                         help="comma-separated subset of distance,last,random")
+    parser.add_argument("--sizes", default=None,
+                        help="comma-separated sizes to run instead of the defaults: numbers of "
+                             "locations (fig3b, fig3d) or of locations to cover (fig3c)")
     parser.add_argument("--jobs", "-j", type=int, default=1,
                         help="parallel processes (default 1; 0 = one per CPU)")
     parser.add_argument("--scheduler", default=None, metavar="ADDR",
@@ -45,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.experiments import harness, sweeps
 
     out = Path(args.out)
-    names = ["fig3b", "fig3c", "fig3d", "synthesis-table"] if args.name == "all" else [args.name]
+    names = ["fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table"] if args.name == "all" else [args.name]
     sorters = None
     if args.sorters:
         sorters = tuple(s.strip() for s in args.sorters.split(",") if s.strip())
@@ -57,12 +61,23 @@ def run(args: argparse.Namespace) -> int:
     if args.seeds is not None and args.seeds < 1:
         print("iterc experiment: --seeds must be at least 1", file=sys.stderr)
         return 2
+    sizes = None
+    if args.sizes:
+        try:
+            sizes = tuple(int(x) for x in args.sizes.split(",") if x.strip())
+        except ValueError:
+            print("iterc experiment: --sizes takes comma-separated integers", file=sys.stderr)
+            return 2
+    args.size_list = sizes
     jobs = args.jobs if args.jobs > 0 else (os.cpu_count() or 1)
     out.mkdir(parents=True, exist_ok=True)
     status = 0
     for name in names:
         if name == "synthesis-table":
             status = max(status, _synthesis_table(args, out))
+            continue
+        if name == "fig3a":
+            status = max(status, _trajectories(args, out))
             continue
         status = max(status, _figure(name, args, out, jobs, sorters, harness, sweeps))
     return status
@@ -71,19 +86,39 @@ def run(args: argparse.Namespace) -> int:
 def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     from iterplan_compiler.experiments import missions, plots
 
-    cases = sweeps.sweep(name, quick=args.quick, seeds=args.seeds, sorters=sorters)
+    sizes = getattr(args, "size_list", None)
+    try:
+        cases = sweeps.sweep(name, quick=args.quick, seeds=args.seeds, sorters=sorters,
+                             universes=sizes if name != "fig3c" else None,
+                             counts=sizes if name == "fig3c" else None)
+    except ValueError as exc:
+        print(f"iterc experiment {name}: {exc}", file=sys.stderr)
+        return 2
     problem = missions.preflight(name, out / "controllers")
     if problem:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
     runner = missions.Runner(str(out / "controllers"))
     prog = harness.Progress(len(cases), name, enabled=not args.no_progress)
-    try:
-        rows = harness.run_cases(cases, runner, jobs=jobs, scheduler=args.scheduler,
-                                 progress=prog)
-    except harness.ExperimentError as exc:
-        print(f"iterc experiment: {exc}", file=sys.stderr)
-        return 2
+    partial = out / f"{name}.partial.csv"
+    fields = harness.CASE_FIELDS + harness.RESULT_FIELDS
+    with partial.open("w", newline="") as fh:
+        # Rows in completion order while the sweep runs; replaced by the ordered CSV at the end.
+        writer = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore",
+                                lineterminator="\n")
+        writer.writeheader()
+
+        def save(row: dict) -> None:
+            writer.writerow(row)
+            fh.flush()
+
+        try:
+            rows = harness.run_cases(cases, runner, jobs=jobs, scheduler=args.scheduler,
+                                     progress=prog, on_row=save)
+        except harness.ExperimentError as exc:
+            print(f"iterc experiment: {exc}", file=sys.stderr)
+            return 2
+    partial.unlink()
     harness.write_csv(rows, out / f"{name}.csv")
     points = harness.aggregate(rows)
     harness.write_summary_csv(points, out / f"{name}_summary.csv")
@@ -94,6 +129,28 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     if failed:
         print(f"{len(failed)} of {len(rows)} runs failed; first: {failed[0]['error']}",
               file=sys.stderr)
+        return 1
+    return 0
+
+
+def _trajectories(args, out: Path) -> int:
+    from iterplan_compiler.experiments import missions, trajectories
+
+    problem = missions.preflight("fig3b", out / "controllers")
+    if problem:
+        print(f"iterc experiment fig3a: cannot run: {problem}", file=sys.stderr)
+        return 1
+    sizes = getattr(args, "size_list", None) or (
+        trajectories.QUICK_SIZES if args.quick else trajectories.FULL_SIZES)
+    runs = trajectories.fly_tracks(out / "controllers", sizes, seed=0)
+    bad = [(u, r.reason) for u, r, _ in runs if not r.ok]
+    png = trajectories.plot_tracks(runs, out / "fig3a.png")
+    for u, r, _ in runs:
+        loops = missions.loop_times(r.log)
+        print(f"fig3a: {u:>9,} locations: loop {loops[0] if loops else float('nan'):8.1f} s")
+    print(f"wrote {png}")
+    if bad:
+        print(f"iterc experiment fig3a: mission(s) ended early: {bad}", file=sys.stderr)
         return 1
     return 0
 

@@ -31,7 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="one transition BDD per player instead of clustered parts")
     parser.add_argument("--cluster-nodes", type=int, default=5000,
                         help="node bound for clustering transition conjuncts (default 5000)")
-    parser.add_argument("--no-recycle", action="store_true", help="disable fixpoint recycling")
+    parser.add_argument("--recycle", action="store_true",
+                        help="fixpoint recycling (start each νX from its previous value; keeps "
+                        "every X set alive, which measured slower on arbiter/lift)")
     parser.add_argument("--no-feedback", action="store_true",
                         help="classic Z passes (no per-goal Z update / early fixpoint)")
     parser.add_argument("--no-early-unrealizable", action="store_true",
@@ -51,11 +53,12 @@ def run(args: argparse.Namespace) -> int:
     if fmt == "auto":
         fmt = "structuredslugs" if args.spec.endswith(".structuredslugs") else "slugsin"
     if fmt == "structuredslugs":
-        from iterplan_compiler.gr1 import structured
-
-        spec, diags, text = structured.load(args.spec)
-    else:
-        spec, diags, text = slugsin.load(args.spec)
+        # Not implemented: compile with slugs' own tools/StructuredSlugsParser/compiler.py
+        # to slugsin first (see docs/gr1.md).
+        print("iterc solve: the structuredslugs format is not supported yet; convert it to "
+              "slugsin first (docs/gr1.md)", file=sys.stderr)
+        return 2
+    spec, diags, text = slugsin.load(args.spec)
     sources = {args.spec: text} if text is not None else {}
     if diags:
         print(render(diags, sources), file=sys.stderr)
@@ -72,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     sopt = SolverOptions(
         feedback=not args.no_feedback,
         early_unrealizable=not args.no_early_unrealizable,
-        recycle=not args.no_recycle,
+        recycle=args.recycle,
         engine=args.engine,
     )
     res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,

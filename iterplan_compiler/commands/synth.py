@@ -23,8 +23,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--explain", action="store_true",
                         help="for an unrealizable spec, print losing states and a "
                              "counter-strategy trace")
-    parser.add_argument("--order", choices=("action_first", "action_last", "blocked"),
-                        default="action_first", help="BDD variable order (symbolic solver)")
+    parser.add_argument("--order",
+                        choices=("clustered", "action_first", "action_last", "blocked"),
+                        default="clustered", help="BDD variable order (symbolic solver)")
 
 
 def _pick_composite(model) -> str | None:

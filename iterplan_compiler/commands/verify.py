@@ -3,7 +3,8 @@
 Model-checks FLTL ``assert`` formulas on a process or composite of SPEC (what MTSA's tests do
 with ``assert Check`` on ``||Sys``; mtsa-semantics §2.9) and prints, for each, either
 ``No LTL Property violations detected`` or the violation and a counterexample trace (prefix,
-then the cycle repeated forever).  Semantics, including deadlocks: ``docs/fltl.md``.
+then the cycle repeated forever).  Like LTSA, only fair runs count unless ``--unfair`` is
+given.  Semantics, including fairness and deadlocks: ``docs/fltl.md``.
 
 Exit codes: 0 every assert holds, 1 a violation or input errors, 2 usage.
 """
@@ -15,11 +16,12 @@ import difflib
 import sys
 from pathlib import Path
 
-from iterplan_compiler.diagnostics import Diagnostic, error, has_errors, render
+from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors, render
 
 HELP = "model-check an FLTL assert on a composite"
 
 E_NO_SUCH_ASSERT = "E304"
+E_NO_SUCH_TARGET = "E305"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -29,27 +31,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         required=True, help="assert to check (repeatable)")
     parser.add_argument("--on", dest="target", metavar="COMPOSITE", required=True,
                         help="process or composite to check the asserts on")
+    parser.add_argument("--unfair", action="store_true",
+                        help="check every infinite run, not only the fair ones (default: "
+                             "fair choice, as LTSA/MTSA)")
     parser.add_argument("--max-states", type=int, default=2_000_000, metavar="N",
                         help="give up when a product grows beyond N states (default 2000000)")
 
 
 def _sources(args: argparse.Namespace, model) -> dict[str, str]:
     sources: dict[str, str] = {}
+    extra = getattr(model, "sources", None) if model is not None else None
+    if isinstance(extra, dict):
+        sources.update({str(k): v for k, v in extra.items() if isinstance(v, str)})
     if model is not None and getattr(model, "source_text", None) is not None:
         sources[str(model.source_path)] = model.source_text
     try:
-        text = Path(args.spec).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        text = Path(args.spec).read_text(encoding="utf-8", errors="replace")
+    except OSError:
         return sources
     sources.setdefault(args.spec, text)
     sources.setdefault(str(Path(args.spec)), text)
     return sources
 
 
-def _missing(name: str, known) -> Diagnostic:
+def _missing(name: str, known, spec: str, *, what: str = "assert",
+             code: str = E_NO_SUCH_ASSERT) -> Diagnostic:
     hint = difflib.get_close_matches(name, sorted(known), n=1)
     extra = f" (did you mean '{hint[0]}'?)" if hint else ""
-    return error(E_NO_SUCH_ASSERT, f"no assert named '{name}'{extra}")
+    # Line 0 = "the file as a whole": renders as `SPEC: error[E304]: ...`.
+    return error(code, f"no {what} named '{name}' in {Path(spec).name}{extra}",
+                 Span(spec, 0, 0))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,9 +68,8 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler import frontend
     from iterplan_compiler.fltl.check import check_assert
 
-    if not Path(args.spec).is_file():
-        print(f"iterc verify: no such file: {args.spec}", file=sys.stderr)
-        return 2
+    # A missing or unreadable SPEC is an input error the front-end reports (E0800, exit 1),
+    # the same as for `iterc check`/`iterc lts`.
     model, diags = frontend.load(args.spec)
     diags = list(diags)
     named = []
@@ -67,9 +77,14 @@ def run(args: argparse.Namespace) -> int:
         for name in args.asserts:
             nf = model.formulas.get(name)
             if nf is None:
-                diags.append(_missing(name, model.formulas))
+                diags.append(_missing(name, model.formulas, args.spec))
             else:
                 named.append(nf)
+    names = getattr(model, "names", None) if model is not None else None
+    if callable(names) and args.target not in set(names()):
+        # Checked here (not left to build_lts) so the message names SPEC and suggests a name.
+        diags.append(_missing(args.target, names(), args.spec, what="process or composite",
+                              code=E_NO_SUCH_TARGET))
     lts = None
     if model is not None and not has_errors(diags):
         lts, more = model.build_lts(args.target)
@@ -83,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
 
     failed = False
     for nf in named:
-        result, cdiags = check_assert(lts, nf, model.fluents, max_states=args.max_states)
+        result, cdiags = check_assert(lts, nf, model.fluents, fair=not args.unfair,
+                                      max_states=args.max_states)
         if cdiags:
             print(render(cdiags, _sources(args, model)), file=sys.stderr)
         if result is None:
@@ -96,6 +112,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"assert {nf.name} on {args.target}: Violation of LTL property {nf.name}")
             print(f"Trace to property violation in {args.target}:")
             print(result.counterexample.render())
+        if result.error_reachable:
+            print(f"  note: {args.target} can reach ERROR (a safety property is violated); "
+                  "runs end there")
         if result.deadlocks:
             print(f"  note: {args.target} has {result.deadlocks} reachable deadlock/END "
                   "state(s); finite runs are checked only for safety violations")

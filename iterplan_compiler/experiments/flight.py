@@ -18,6 +18,8 @@ flight time, as in the paper.
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -95,6 +97,35 @@ def example_bindings(grid, data: dict | None):
     return b
 
 
+class _CpuTime:
+    """Stand-in for the ``time`` module as seen by the executor: ``perf_counter`` is the
+    process CPU clock, everything else is the real module."""
+
+    def __getattr__(self, name):
+        return getattr(time, name)
+
+    @staticmethod
+    def perf_counter() -> float:
+        return time.process_time()
+
+
+class _executor_cpu_clock:
+    """Context manager: while a mission runs in *this* process, the executor's think-time
+    measurement uses CPU time.  Only needed until the runtime's RunConfig offers a
+    ``compute_clock`` (then :func:`fly` sets that instead)."""
+
+    def __enter__(self):
+        from iterplan_compiler.runtime import executor
+
+        self._mod = executor
+        self._saved = executor.time
+        executor.time = _CpuTime()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._mod.time = self._saved
+
+
 def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
@@ -149,12 +180,23 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
 
     vehicle = SimVehicle(home=grid.home, heading=grid.arrival_heading)
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
-                    max_time=max_time, log_limit=0, end_action="loiter")
+                    max_time=max_time, log_limit=10**12, end_action="loiter")
+    # log_limit: the executor calls log_entry only while its log is below the limit; our
+    # override keeps its own compact log (self.log stays empty unless full_log).
+    # Charge CPU time of this process, not wall time: the think-time charge must not depend on
+    # how busy the machine is (sweeps run several missions in parallel processes).
+    cpu_clock = "compute_clock" in {f.name for f in dataclasses.fields(RunConfig)}
+    if cpu_clock:
+        cfg.compute_clock = time.process_time
     try:
         ex = _Recorder(table, grid, vehicle, example_bindings(grid, map_data), cfg)
     except ValueError as exc:   # BindingError is a ValueError: the map lacks a sensor
         raise StageError("runtime", str(exc)) from None
-    result = ex.run()
+    if cpu_clock:
+        result = ex.run()
+    else:
+        with _executor_cpu_clock():
+            result = ex.run()
     track = [(float(t), float(x), float(y)) for t, x, y, _ in result.track]
     return FlightResult(events, float(vehicle.airspeed), track, dict(result.summary),
                         bool(result.ok), str(result.reason), result)

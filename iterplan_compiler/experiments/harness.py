@@ -92,12 +92,17 @@ def _run_one(runner: Runner, case: Case) -> dict:
 
 
 def run_cases(cases: Sequence[Case], runner: Runner, *, jobs: int = 1,
-              scheduler: str | None = None, progress: Progress | None = None) -> list[dict]:
-    """Run every case; rows come back in the order of ``cases`` whatever the executor."""
+              scheduler: str | None = None, progress: Progress | None = None,
+              on_row: Callable[[dict], None] | None = None) -> list[dict]:
+    """Run every case; rows come back in the order of ``cases`` whatever the executor.
+    ``on_row`` sees each row as soon as its mission ends (e.g. to save partial results of a
+    sweep that takes hours)."""
     rows: list[dict | None] = [None] * len(cases)
 
     def done(i: int, row: dict) -> None:
         rows[i] = row
+        if on_row is not None:
+            on_row(row)
         if progress is not None:
             progress.update(ok=not row.get("error"))
 

@@ -84,11 +84,13 @@ def import_module_file(path: Path, name: str) -> ModuleType:
     return mod
 
 
-def compile_example(name: str, out_dir: Path, *, text: str | None = None) -> tuple[Path, dict]:
+def compile_example(name: str, out_dir: Path, *, text: str | None = None,
+                    reuse: bool = False) -> tuple[Path, dict]:
     """Compile bundled example ``name`` into ``out_dir/<name>_controller.py``.
 
-    The module is reused when it exists and was generated from the same spec text (its header
-    records the spec's sha256), so sweeps compile once.
+    With ``reuse``, an existing module generated from the same spec text (its header records
+    the spec's sha256) is kept; by default the module is regenerated, so a changed compiler
+    never leaves a stale controller behind.
     """
     ex = EXAMPLES[name]
     spec = example_path(name)
@@ -98,7 +100,7 @@ def compile_example(name: str, out_dir: Path, *, text: str | None = None) -> tup
     from hashlib import sha256
 
     digest = sha256(src_text.encode("utf-8")).hexdigest()
-    if target.exists() and digest in target.read_text():
+    if reuse and target.exists() and digest in target.read_text():
         return target, {"cached": True}
     source, stats = compile_to_source(spec, ex.composite, text=src_text)
     target.write_text(source)

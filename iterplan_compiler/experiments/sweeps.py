@@ -72,9 +72,11 @@ QUICK: dict[str, SweepConfig] = {
 
 def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
           sorters: tuple[str, ...] | None = None,
-          universes: tuple[int, ...] | None = None) -> list[Case]:
+          universes: tuple[int, ...] | None = None,
+          counts: tuple[int, ...] | None = None) -> list[Case]:
     """The cases of one experiment, in a deterministic order (largest first, so the slow
-    cases start early when run in parallel)."""
+    cases start early when run in parallel).  ``universes`` / ``counts`` override the
+    configured sizes."""
     table = QUICK if quick else FULL
     if experiment not in table:
         raise ValueError(f"unknown experiment {experiment!r}; expected one of "
@@ -84,7 +86,7 @@ def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
     if n_seeds < 1:
         raise ValueError("seeds must be at least 1")
     cases = [Case(experiment, u, c, s, seed, cfg.loops)
-             for u in (universes or cfg.universes) for c in cfg.counts
+             for u in (universes or cfg.universes) for c in (counts or cfg.counts)
              for s in (sorters or cfg.sorters) for seed in range(n_seeds)]
     for case in cases:
         check_case(case)

@@ -8,6 +8,9 @@ What is checked (the choices are documented in ``docs/semantics.md``, "FLTL choi
 * **Infinite runs** (with infinitely many visible actions) must satisfy φ.  Violations are
   searched as accepting lassos of the product of the LTS with the generalised Büchi automaton of
   ¬φ; an extra acceptance bit on visible moves rules out cycles made of ``tau`` alone.
+* **Fairness** (default, LTSA's "fair choice": its LTL check only accepts cycles in terminal
+  sets): only *strongly fair* infinite runs count -- a run visiting a state infinitely often
+  takes each of its transitions infinitely often.  ``fair=False`` checks every infinite run.
 * **Finite runs** -- ending in a deadlock, an ``END`` state, a move into ``ERROR`` (the move
   itself is the run's last action), or followed
   only by ``tau`` forever -- are *not* extended by idling: such a run violates φ only if it is a
@@ -81,6 +84,7 @@ class CheckResult:
     counterexample: Counterexample | None = None
     deadlocks: int = 0  # reachable states without moves (END states included)
     stats: dict = field(default_factory=dict, compare=False)
+    error_reachable: bool = False  # the LTS itself can move into ERROR (a property violation)
 
 
 def _visible(a: str, alphabet: frozenset[str]) -> str:
@@ -120,7 +124,7 @@ def model_check(
                 yield a, (t, q2), m | visible_bit
 
     an = analyse([(lts.initial, neg.initial)], succ, full, max_nodes=max_states)
-    deadlocks = _count_deadlocks(lts, out)
+    deadlocks, error_reachable = _reachable_ends(lts, out)
     stats: dict = {"product_states": len(an.adj), "fair": fair}
     if fair:
         cex = _fair_counterexample(an, out, full, stats)
@@ -128,11 +132,12 @@ def model_check(
         found = lasso(an, full)
         cex = None if found is None else Counterexample(tuple(found[0]), tuple(found[1]))
     if cex is not None:
-        return CheckResult(False, cex, deadlocks, stats)
+        return CheckResult(False, cex, deadlocks, stats, error_reachable)
     bad = _bad_prefix(lts, out, formula, fluents, max_states)
     if bad is not None:
-        return CheckResult(False, Counterexample(tuple(bad), ()), deadlocks, stats)
-    return CheckResult(True, None, deadlocks, stats)
+        return CheckResult(False, Counterexample(tuple(bad), ()), deadlocks, stats,
+                           error_reachable)
+    return CheckResult(True, None, deadlocks, stats, error_reachable)
 
 
 FAIR_CYCLE_LIMIT = 500
@@ -186,19 +191,23 @@ def _fair_counterexample(
     return Counterexample(tuple(a for _, a, _ in prefix), tuple(a for _, a, _ in cycle), actions)
 
 
-def _count_deadlocks(lts: LTS, out: dict[int, list[tuple[str, int]]]) -> int:
+def _reachable_ends(lts: LTS, out: dict[int, list[tuple[str, int]]]) -> tuple[int, bool]:
+    """Number of reachable states without moves, and whether ERROR is reachable."""
     seen = {lts.initial}
     queue = deque([lts.initial])
     count = 0
+    error_reachable = False
     while queue:
         s = queue.popleft()
         if not out[s]:
             count += 1
         for _, t in out[s]:
-            if t != ERROR and t not in seen:
+            if t == ERROR:
+                error_reachable = True
+            elif t not in seen:
                 seen.add(t)
                 queue.append(t)
-    return count
+    return count, error_reachable
 
 
 def _bad_prefix(

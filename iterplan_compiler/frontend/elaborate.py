@@ -48,11 +48,12 @@ OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "prope
             "heuristic", "monolithicDirector")
 SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector",
                                 "checkCompatibility"})
-# Parsed, accepted at load time, but building such a composite reports E0150.
-UNSUPPORTED_AT_BUILD = frozenset({"plant", "controlled_det"})
+# Operators on a spec'd plant that do not synthesise (§3.11).
+PLANT_KEYWORDS = frozenset({"plant", "controlled_det"})
+# Parsed, accepted at load time, but building such a composite reports E0150 (none left).
+UNSUPPORTED_AT_BUILD: frozenset[str] = frozenset()
 UNSUPPORTED_KEYWORDS = frozenset({"closure", "abstract", "optimistic", "pessimistic",
-                                  "component", "rtc", "rtcAnalysis", "starenv", "probabilistic",
-                                  "mdp"})
+                                  "component", "rtc", "rtcAnalysis", "probabilistic", "mdp"})
 MAX_STATES = 2_000_000
 
 
@@ -395,7 +396,82 @@ class Elaborator(ModelBackend):
                 self.building.pop()
         if name in self.formula_decls and self.formula_decls[name].kind != "assert":
             return self._safety_formula(name, span, diags)
+        if name == "DEFAULT":
+            machines = self._default_machines(span, diags)
+            if machines is None:
+                return None
+            from iterplan_compiler.ir.compose import StateExplosion, compose
+
+            try:
+                return compose(machines, "DEFAULT", max_states=MAX_STATES)
+            except StateExplosion as e:
+                diags.append(error("E0402", f"composing DEFAULT: {e}", span))
+                return None
         raise EvalError(error("E0102", f"undefined process or composite '{name}'", span))
+
+    def _default_machines(self, span: Span, diags: list[Diagnostic]) -> list[LTS] | None:
+        """MTSA's ``DEFAULT`` composite (§4.1): every process (at its default parameters) and
+        every ``ltl_property``/``constraint``, in declaration order."""
+        names = [*self.processes,
+                 *(n for n, f in self.formula_decls.items() if f.kind != "assert")]
+        out = []
+        for n in names:
+            lts = self.get(n, (), span, diags)
+            if lts is None:
+                return None
+            out.append(lts)
+        return out
+
+    # ------------------------------------------------------------------ legality
+    def legality(self, name: str) -> tuple[bool, str]:
+        """MTSA's ``LegalityAnalyser`` over a composite's first two machines (§4.2).
+
+        The composite ``name`` (else the first composite, else ``DEFAULT``: MTSA's fallback)
+        is instantiated; its machine 0 is the *controller*, machine 1 the *plant*, the others
+        are context.  Controllable actions: the controllerSpec attached with ``~{G}``, else the
+        file's only controllerSpec, else a declared set whose name contains "control"
+        (case-insensitive), else the only declared set.  (MTSA's test passes the machines and the set explicitly; this rule reproduces
+        the corpus' choices.)  Returns ``(legal, detail)``; a problem building the machines is
+        reported as ``(False, "error: ...")``.
+        """
+        from iterplan_compiler.ir.legality import is_legal
+
+        diags: list[Diagnostic] = []
+        span = Span("<legality>", 0, 0)
+        d = self.composites.get(name) or next(iter(self.composites.values()), None)
+        try:
+            if d is not None:
+                env = self.env().with_params(self._params(d.params, (), d.name, d.span))
+                machines = self._cbody(d.body, env, diags)
+                spec = self._spec_of(d)
+            else:
+                machines = self._default_machines(span, diags)
+                spec = None
+        except EvalError as e:
+            return False, f"error: {e.diag.message}"
+        if machines is None or len(machines) < 2:
+            msg = "; ".join(x.message for x in diags if x.is_error) or "fewer than two machines"
+            return False, f"error: {msg}"
+        if spec is None and len(self.specs) == 1:
+            spec = next(iter(self.specs))  # `||Sys = (C || Plant)`: the file's only spec
+        if spec is not None and spec in self.specs:
+            controllable = self.specs[spec].controllable
+            source = f"controllerSpec {spec}"
+        else:
+            named = [n for n in self.sets if "control" in n.lower()]
+            if not named and len(self.sets) == 1:
+                named = list(self.sets)
+            if not named:
+                return False, "error: no controllable set (no ~{G} and no set named *Control*)"
+            controllable = frozenset(self.sets[named[0]])
+            source = f"set {named[0]}"
+        res = is_legal(machines[0], machines[1], controllable, context=machines[2:],
+                       max_states=MAX_STATES)
+        pair = f"controller {machines[0].name}, plant {machines[1].name}, controllable = {source}"
+        if res.legal:
+            return True, f"legal ({pair}; {res.product_states} states)"
+        why = res.witness.describe() if res.witness is not None else ""
+        return False, f"not legal ({pair}): {why}"
 
     def _safety_formula(self, name: str, span: Span, diags: list[Diagnostic]) -> LTS | None:
         nf = self.formulas.get(name)
@@ -416,38 +492,97 @@ class Elaborator(ModelBackend):
 
     def _composite(self, d: S.CompositeDecl, args: tuple[Value, ...], inst: str,
                    diags: list[Diagnostic]) -> LTS | None:
+        """Build a composite in MTSA's operator order (semantics doc §2.6):
+
+        compose → relabel/hide/expose → ``deterministic`` → ``minimal`` → synthesis
+        (``controller``, ``heuristic``, ...) → ``plant`` → ``controlled_det`` → ``property`` →
+        final hide/expose.  Synthesis composites and ``plant``/``controlled_det`` also compose
+        the machines of their spec's ``safety`` list (§3.2).
+        """
         env = self.env().with_params(self._params(d.params, args, d.name, d.span))
         kws = set(d.keywords)
-        if kws & UNSUPPORTED_AT_BUILD:
-            bad = " ".join(sorted(kws & UNSUPPORTED_AT_BUILD))
-            diags.append(error("E0150", f"unsupported construct: operator '{bad}'", d.span))
-            return None
         if kws & SYNTHESIS_KEYWORDS:
-            return self._synthesised(d, inst, diags)
-        machines = self._cbody(d.body, env, diags)
-        if machines is None:
+            lts = self._synthesised(d, inst, diags)
+        elif kws & PLANT_KEYWORDS:
+            lts = self._plant_operators(d, env, inst, diags)
+        else:
+            machines = self._cbody(d.body, env, diags)
+            if machines is None:
+                return None
+            return self._compose_and_finish(machines, d, env, inst, diags)
+        if lts is None:
             return None
-        return self._compose_and_finish(machines, d, env, inst, diags)
+        return self._post_synthesis(lts, d, env, diags)
 
-    def _compose_and_finish(self, machines: list[LTS], d: S.CompositeDecl, env: Env, inst: str,
-                            diags: list[Diagnostic]) -> LTS | None:
-        from iterplan_compiler.ir.compose import StateExplosion, compose
-
+    def _priority(self, d: S.CompositeDecl, env: Env) -> tuple[tuple[str, ...], bool] | None:
         prio = None
         for t in d.tails:
             if t.kind in ("high", "low") and t.labels is not None:
                 prio = (expand_set(t.labels, env), t.kind == "high")
+        return prio
+
+    def _compose(self, machines: list[LTS], d: S.CompositeDecl, env: Env, inst: str,
+                 diags: list[Diagnostic]) -> LTS | None:
+        from iterplan_compiler.ir.compose import StateExplosion, compose
+
         try:
-            lts = compose(machines, inst, prio, max_states=MAX_STATES)
+            return compose(machines, inst, self._priority(d, env), max_states=MAX_STATES)
         except StateExplosion as e:
             diags.append(error("E0402", f"composing {inst}: {e}", d.span))
             return None
+
+    def _compose_and_finish(self, machines: list[LTS], d: S.CompositeDecl, env: Env, inst: str,
+                            diags: list[Diagnostic]) -> LTS | None:
+        lts = self._compose(machines, d, env, inst, diags)
+        if lts is None:
+            return None
         return self._apply_tails(lts, d.tails, d.keywords, env, diags, d.span, process=False)
 
-    def _apply_tails(self, lts: LTS, tails: tuple[S.Tail, ...], keywords: tuple[str, ...],
-                     env: Env, diags: list[Diagnostic], span: Span, *, process: bool) -> LTS | None:
+    def _plant_operators(self, d: S.CompositeDecl, env: Env, inst: str,
+                         diags: list[Diagnostic]) -> LTS | None:
+        """``plant ||P = E~{G}`` (the product with the goal's fluent monitors, §3.11) and
+        ``controlled_det ||D = E~{G}`` (controllable determinisation, §3.8)."""
+        from iterplan_compiler.frontend.operators import controlled_determinisation
         from iterplan_compiler.ir import alphabet_ops as ops
-        from iterplan_compiler.ir import minimise as mn
+
+        problem = self._problem(d.name, diags)
+        if problem is None:
+            return None
+        machines = [*problem.plant, *problem.safety]
+        if "plant" in d.keywords:
+            try:
+                encode = importlib.import_module("iterplan_compiler.synthesis.encode")
+                machines = list(encode.prepare(problem).components)
+            except ImportError:
+                diags.append(error("E0900", f"composite {d.name} needs the synthesis encoder "
+                                   "(iterplan_compiler.synthesis.encode), which is not "
+                                   "available", d.span))
+                return None
+            except Exception as e:  # SynthesisError: an unsupported goal
+                diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
+                return None
+        lts = self._compose(machines, d, env, inst, diags)
+        if lts is None:
+            return None
+        lts = self._alphabet_tails(lts, d.tails, env)
+        if "plant" in d.keywords:
+            # the fluent monitors' states are internal bookkeeping, the product is the plant
+            lts = renamed(lts, inst)
+        if "controlled_det" in d.keywords and not ops.is_deterministic(lts):
+            lts = reachable(controlled_determinisation(lts, problem.controllable, inst))
+        return lts
+
+    def _post_synthesis(self, lts: LTS, d: S.CompositeDecl, env: Env,
+                        diags: list[Diagnostic]) -> LTS | None:
+        """``property`` and the final hide/expose after synthesis / plant operators."""
+        return self._keyword_ops(lts, tuple(k for k in d.keywords
+                                            if k in ("starenv", "property")),
+                                 d.tails, env, diags, d.span, process=False,
+                                 hide_after=True)
+
+    def _alphabet_tails(self, lts: LTS, tails: tuple[S.Tail, ...], env: Env) -> LTS:
+        """``+S``, ``/{relabels}``, then ``\\S`` / ``@S`` (MTSA applies them in this order)."""
+        from iterplan_compiler.ir import alphabet_ops as ops
 
         for t in tails:
             if t.kind == "extend" and t.labels is not None:
@@ -455,30 +590,58 @@ class Elaborator(ModelBackend):
         for t in tails:
             if t.kind == "relabel":
                 lts = relabel(lts, expand_relabels(t.relabels, env))
+        return self._hide_tails(lts, tails, env)
+
+    def _hide_tails(self, lts: LTS, tails: tuple[S.Tail, ...], env: Env) -> LTS:
+        from iterplan_compiler.ir import alphabet_ops as ops
+
         for t in tails:
             if t.kind == "hide" and t.labels is not None:
                 lts = ops.hide(lts, expand_set(t.labels, env))
             elif t.kind == "expose" and t.labels is not None:
                 lts = ops.expose(lts, expand_set(t.labels, env))
+        return lts
+
+    def _apply_tails(self, lts: LTS, tails: tuple[S.Tail, ...], keywords: tuple[str, ...],
+                     env: Env, diags: list[Diagnostic], span: Span, *, process: bool) -> LTS | None:
+        lts = self._alphabet_tails(lts, tails, env)
+        return self._keyword_ops(lts, keywords, tails, env, diags, span, process=process)
+
+    def _keyword_ops(self, lts: LTS, keywords: tuple[str, ...], tails: tuple[S.Tail, ...],
+                     env: Env, diags: list[Diagnostic], span: Span, *, process: bool,
+                     hide_after: bool = False) -> LTS | None:
+        """``deterministic`` → ``minimal`` → ``starenv`` → ``property`` (§2.6), then (``hide_after``) the
+        hide/expose tails once more, as MTSA re-applies hiding after every operator."""
+        from iterplan_compiler.ir import alphabet_ops as ops
+        from iterplan_compiler.ir import minimise as mn
+
         kws = set(keywords)
         name = lts.name
         try:
-            if "property" in kws and not process:
+            if "deterministic" in kws:
                 lts = mn.deterministic(lts, name)
+            if "minimal" in kws:
+                lts = mn.weak_minimise(lts, name)
+            if "starenv" in kws:
+                from iterplan_compiler.frontend.operators import star_environment
+
+                lts = star_environment(lts, name)
             if "property" in kws:
+                if not process:
+                    # a property composite is determinised first (§2.4); a property process
+                    # must already be deterministic (property_complete reports it)
+                    lts = mn.deterministic(lts, name)
                 err = None
                 for t in tails:
                     if t.kind == "error_set" and t.labels is not None:
                         err = expand_set(t.labels, env)
                 lts = ops.property_complete(lts, err)
             lts = reachable(lts)
-            if "deterministic" in kws:
-                lts = mn.deterministic(lts, name)
-            if "minimal" in kws:
-                lts = mn.weak_minimise(lts, name)
         except ValueError as e:  # NotDeterministic and friends
             diags.append(error("E0403", str(e), span))
             return None
+        if hide_after:
+            lts = self._hide_tails(lts, tails, env)
         return lts
 
     def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic]) -> list[LTS] | None:
@@ -506,24 +669,45 @@ class Elaborator(ModelBackend):
             if truth(evaluate(b.cond, env), b.span):
                 return self._cbody(b.then, env, diags)
             return [] if b.other is None else self._cbody(b.other, env, diags)
-        # CItem
+        # CItem: `p1:p2::...:prim / {relabels}`.  A prefix may bind variables (`[i:R]:P(i)`),
+        # which scope over the rest of the item, so each non-sharing prefix value gives its own
+        # environment; prefixes are applied innermost first, the relabelling last.
         from iterplan_compiler.ir import alphabet_ops as ops
 
-        base = self._cbody(b.prim, env, diags)
-        if base is None:
-            return None
-        machines = base
-        for pre in reversed(b.prefixes):
-            labels = expand_label(pre.label, env)
-            if pre.share:
-                machines = [ops.share_labels(m, labels) for m in machines]
-            else:
-                machines = [renamed(ops.prefix_labels(m, lab), f"{lab}:{m.name}")
-                            for lab in labels for m in machines]
-        if b.relabels is not None:
-            mapping = expand_relabels(b.relabels, env)
-            machines = [relabel(m, mapping) for m in machines]
-        return machines
+        out = []
+        for leaf_env, chain in self._prefix_chains(b.prefixes, env):
+            base = self._cbody(b.prim, leaf_env, diags)
+            if base is None:
+                return None
+            machines = base
+            for share, labels in reversed(chain):
+                if share:
+                    machines = [ops.share_labels(m, labels) for m in machines]
+                else:
+                    lab = labels[0]
+                    machines = [renamed(ops.prefix_labels(m, lab), f"{lab}:{m.name}")
+                                for m in machines]
+            if b.relabels is not None:
+                mapping = expand_relabels(b.relabels, leaf_env)
+                machines = [relabel(m, mapping) for m in machines]
+            out.extend(machines)
+        return out
+
+    def _prefix_chains(self, prefixes: tuple[S.Prefix, ...], env: Env
+                       ) -> list[tuple[Env, list[tuple[bool, list[str]]]]]:
+        """Every combination of the prefixes' values: ``(env at the item, [(share, labels)])``
+        outermost first; a sharing prefix keeps all its labels in one entry."""
+        chains: list[tuple[Env, list[tuple[bool, list[str]]]]] = [(env, [])]
+        for pre in prefixes:
+            nxt: list[tuple[Env, list[tuple[bool, list[str]]]]] = []
+            for e, chain in chains:
+                if pre.share:
+                    nxt.append((e, [*chain, (True, expand_label(pre.label, e))]))
+                else:
+                    nxt.extend((e2, [*chain, (False, [lab])])
+                               for lab, e2 in expand_label_env(pre.label, e))
+            chains = nxt
+        return chains
 
     # ------------------------------------------------------------------ synthesis
     def _spec_of(self, d: S.CompositeDecl) -> str | None:

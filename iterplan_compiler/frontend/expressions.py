@@ -301,7 +301,8 @@ def expand_set(s: S.LabelSetRef, env: Env) -> tuple[str, ...]:
 
 
 def expand_relabels(items: tuple[S.RelabelItem, ...], env: Env) -> dict[str, list[str]]:
-    """Relabelling ``{new/old, ...}`` → ``{old: [new, ...]}`` (bindings in ``old`` flow into ``new``)."""
+    """Relabelling ``{new/old, ...}`` → ``{old: [new, ...]}`` (bindings flow from ``new`` into
+    ``old``, or, if that fails, the other way)."""
     out: dict[str, list[str]] = {}
     for it in items:
         if isinstance(it, S.RelabelForall):
@@ -309,11 +310,21 @@ def expand_relabels(items: tuple[S.RelabelItem, ...], env: Env) -> dict[str, lis
                 for k, vs in expand_relabels(it.items, e2).items():
                     out.setdefault(k, []).extend(v for v in vs if v not in out.get(k, []))
             continue
-        for old, e2 in expand_label_env(it.old, env):
-            for new in expand_label(it.new, e2):
-                lst = out.setdefault(old, [])
-                if new not in lst:
-                    lst.append(new)
+        # MTSA (like LTSA) expands the new label first, so its bindings flow into the old one
+        # (`{f[i:1..2].out/f[i+1].in}`); we also accept the reverse (`{n[i]/o[i:R]}`).
+        try:
+            pairs = [(old, new) for new, e2 in expand_label_env(it.new, env)
+                     for old in expand_label(it.old, e2)]
+        except EvalError as first:
+            try:
+                pairs = [(old, new) for old, e2 in expand_label_env(it.old, env)
+                         for new in expand_label(it.new, e2)]
+            except EvalError:
+                raise first from None
+        for old, new in pairs:
+            lst = out.setdefault(old, [])
+            if new not in lst:
+                lst.append(new)
     return out
 
 

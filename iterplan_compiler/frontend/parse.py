@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import functools
 import importlib.resources
+import os
 import re
+import sys
 from fractions import Fraction
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from iterplan_compiler.diagnostics import Diagnostic, Span, error, warning
+from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.frontend import syntax as S
 
 _MAX_ERRORS = 50
@@ -34,13 +36,39 @@ _UNSUPPORTED_WORDS = {
 }
 
 
+def _cache_file() -> str | bool:
+    """Where Lark may keep the analysed parse table between runs (building it takes ~1 s, which
+    every ``iterc`` call would pay).  A per-user directory, not the shared temp dir, because
+    the cache is a pickle.  Lark stores the grammar's hash in the file and rebuilds (and
+    rewrites) it when the grammar changes or the file is unreadable.  ``ITERPLAN_NO_CACHE=1``
+    or an unwritable home disable it."""
+    if os.environ.get("ITERPLAN_NO_CACHE"):
+        return False
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    folder = os.path.join(base, "iterplan")
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError:
+        return False
+    if not os.access(folder, os.W_OK):
+        return False
+    return os.path.join(folder, f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}.pickle")
+
+
 @functools.lru_cache(maxsize=1)
 def parser() -> Lark:
     """The (cached) Lark LALR parser of ``fsp.lark``."""
     text = importlib.resources.files("iterplan_compiler.grammar").joinpath("fsp.lark").read_text(
         encoding="utf-8")
-    return Lark(text, parser="lalr", lexer="contextual", propagate_positions=True,
-                maybe_placeholders=True, cache=False)
+    options = dict(parser="lalr", lexer="contextual", propagate_positions=True,
+                   maybe_placeholders=True)
+    cache = _cache_file()
+    if cache:
+        try:
+            return Lark(text, cache=cache, **options)
+        except Exception:  # noqa: BLE001 - a broken cache must never stop the compiler
+            pass
+    return Lark(text, cache=False, **options)
 
 
 def _tok_span(path: str, tok: Token) -> Span:
@@ -57,8 +85,14 @@ def _describe(tok: Token) -> str:
     return f"'{tok.value}'"
 
 
-def parse_text(text: str, path: str = "<input>") -> tuple[S.SpecFile, list[Diagnostic]]:
-    """Parse ``text``; return the AST of every well-formed declaration and all diagnostics."""
+def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
+               ) -> tuple[S.SpecFile, list[Diagnostic]]:
+    """Parse ``text``; return the AST of every well-formed declaration and all diagnostics.
+
+    MTS maybe actions (``a?``) are rejected (E0150, the declaration is dropped) unless
+    ``allow_mts``: then they are kept as label parts named ``a?`` (the printer's round trip
+    uses this; elaboration has no modal semantics, so :func:`frontend.load` never sets it).
+    """
     diags: list[Diagnostic] = []
     lark = parser()
     decl_states = _decl_start_states(lark)
@@ -104,7 +138,7 @@ def parse_text(text: str, path: str = "<input>") -> tuple[S.SpecFile, list[Diagn
         if not diags:  # pragma: no cover - on_error always records before giving up
             diags.append(error("E0001", "syntax error", Span(path, 1, 1)))
         return S.SpecFile(path, ()), diags
-    builder = _Builder(path, diags)
+    builder = _Builder(path, diags, allow_mts=allow_mts)
     decls = []
     for child in tree.children:
         try:
@@ -198,9 +232,10 @@ def parse_int(text: str) -> int:
 class _Builder:
     """Converts the Lark tree into :mod:`syntax` nodes."""
 
-    def __init__(self, path: str, diags: list[Diagnostic]):
+    def __init__(self, path: str, diags: list[Diagnostic], *, allow_mts: bool = False):
         self.path = path
         self.diags = diags
+        self.allow_mts = allow_mts
 
     # -- helpers
     def span(self, node: Tree | Token) -> Span:
@@ -407,14 +442,13 @@ class _Builder:
         raise self.bad(t, f"internal: unexpected state node {d}")  # pragma: no cover
 
     def choices(self, t: Tree) -> S.Choices:
-        foreach = None
+        foreach: tuple[S.Bind, ...] = ()
         out = []
         children = list(t.children)
-        if children and (children[0] is None or isinstance(children[0], Token)):
-            fe, bind = children[0], children[1]
-            children = children[2:]
-            if fe is not None and bind is not None:
-                foreach = self.bind(bind)
+        if children and (children[0] is None or children[0].data == "foreach"):
+            if children[0] is not None:
+                foreach = tuple(self.bind(b) for b in children[0].children[1:])
+            children = children[1:]
         for c in children:
             if c is None:
                 continue
@@ -482,12 +516,14 @@ class _Builder:
     def part(self, t: Tree | Token) -> S.Part:
         if isinstance(t, Token):
             if t.type == "LOWER_ID":
-                if t.value.endswith("?") or "?" in t.value:
+                if "?" in t.value and not self.allow_mts:
                     raise self.bad(t, f"unsupported construct: MTS maybe action '{t.value}'",
                                    "E0150")
                 return S.Ident(str(t), self.span(t))
             if t.type == "UPPER_ID":
                 return S.SetName(str(t), self.span(t))
+            if t.type == "INT":  # `a.1`: kept literally (the label is "a.1")
+                return S.Ident(str(t), self.span(t))
             raise self.bad(t, f"internal: unexpected token {t.type}")  # pragma: no cover
         if t.data == "set_lit":
             return self.set_lit(t)
@@ -501,7 +537,7 @@ class _Builder:
             return S.Index(self.expr(t.children[0]), self.span(t))
         if d == "b_range":
             return S.RangeIndex(self.expr(t.children[0]), self.expr(t.children[1]), self.span(t))
-        if d == "fbind":
+        if d in ("fbind", "cbind", "febind"):
             return self.bind(t)
         raise self.bad(t, f"internal: unexpected bracket {d}")  # pragma: no cover
 
@@ -536,9 +572,14 @@ class _Builder:
                 out.append(S.RelabelPair(self.label(c.children[0]), self.label(c.children[1]),
                                          self.span(c)))
             else:
-                *binds, inner = c.children
-                out.append(S.RelabelForall(tuple(self.bind(b) for b in binds),
-                                           self.relabel_set(inner), self.span(c)))
+                *brackets, inner = c.children
+                binds = []
+                for b in brackets:
+                    part = self.bracket(b)
+                    if not isinstance(part, S.Bind):
+                        raise self.bad(b, "'forall' in a relabelling needs bindings [i:R]")
+                    binds.append(part)
+                out.append(S.RelabelForall(tuple(binds), self.relabel_set(inner), self.span(c)))
         return tuple(out)
 
     # -- formulas

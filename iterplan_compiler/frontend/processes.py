@@ -21,6 +21,7 @@ from iterplan_compiler.frontend.expressions import (
     Env,
     EvalError,
     Value,
+    bind_all,
     evaluate,
     expand_label_env,
     fmt,
@@ -183,9 +184,7 @@ class _Builder:
         return s
 
     def fill_choices(self, s: int, ch: S.Choices, env: Env) -> None:
-        envs = [env]
-        if ch.foreach is not None:
-            envs = [e for _, e in part_values(ch.foreach, env)]
+        envs = list(bind_all(ch.foreach, env))
         for e0 in envs:
             for c in ch.choices:
                 if c.guard is not None and not truth(evaluate(c.guard, e0), c.span):

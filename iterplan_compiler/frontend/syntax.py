@@ -130,7 +130,7 @@ class Cond(Expr):
 
 @dataclass(frozen=True)
 class Ident:
-    """A lower-case label part ``a``."""
+    """A lower-case label part ``a`` (or a literal number after a dot, ``a.1``)."""
 
     name: str
     span: Span = _span()
@@ -280,10 +280,10 @@ class Choice:
 
 @dataclass(frozen=True)
 class Choices:
-    """``( [foreach [i:R]] c1 | c2 | ... )``."""
+    """``( [foreach [i:R][j:S]...] c1 | c2 | ... )`` (no bindings: ``foreach == ()``)."""
 
     choices: tuple[Choice, ...]
-    foreach: Bind | None = None
+    foreach: tuple[Bind, ...] = ()
     span: Span = _span()
 
 

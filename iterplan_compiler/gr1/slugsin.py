@@ -267,7 +267,7 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
             sp = Span(path, lineno, col, lineno, col + len(name))
             if len(toks) > 1:
                 diags.append(error("G104", "one variable name per line expected", sp))
-            elif name in _OPERATORS or "'" in name or name[0].isdigit() and name.isdigit():
+            elif name in _OPERATORS or "'" in name or name.isdigit():
                 diags.append(error("G104", f"'{name}' is not a valid variable name", sp))
             elif name in declared:
                 diags.append(error("G104", f"variable '{name}' declared twice", sp))

@@ -7,7 +7,9 @@ Contract of :func:`compose`:
   combination of their nondeterministic choices), the others stay put;
 * labels owned by one component, and every ``tau``, interleave (tau never synchronises);
 * if any moving component enters ERROR the product enters its single ERROR (target ``-1``);
-* a product state is an END state iff every component is in one of its END states;
+* a product state is END iff it has no move, every component that has END states is in one,
+  and every label of the other components belongs to such a terminating component (§2.5);
+  all END tuples are merged into one END state (MTSA has a single END);
 * only reachable product states are built; states are numbered breadth-first from the
   initial tuple, visiting the moves of a state in sorted ``(label, target tuple)`` order, so the
   result is canonical for the given list of components;
@@ -77,11 +79,39 @@ def explore_product(
     ``tuples[i]`` is the component-state tuple of product state ``i`` (canonical BFS order);
     transitions are ``(source, label, target)`` with target ``ERROR`` for the error state.
     Exposed for analyses (legality, projections) that need to know which component states a
-    product state stands for.
+    product state stands for.  Unlike :func:`compose`, END tuples are not merged here.
+    """
+    codes, transitions, end_states, decode = _explore(components, priority, max_states, name)
+    return [decode(c) for c in codes], transitions, end_states
+
+
+def _explore(
+    components: Sequence[LTS],
+    priority: Priority | None,
+    max_states: int | None,
+    name: str,
+) -> tuple[list[int], list[tuple[int, str, int]], list[int], Callable[[int], StateTuple]]:
+    """The exploration behind :func:`compose` and :func:`explore_product`.
+
+    A product state is encoded as one integer in mixed radix, component 0 most significant, so
+    (a) a component move is "add a precomputed delta" instead of building a tuple and (b) the
+    integer order equals the lexicographic order of state tuples, which keeps the canonical
+    numbering "sorted by (label, target tuple)".  ERROR is the code -1, sorting first.
     """
     n = len(components)
+    sizes = [max(c.num_states, 1) for c in components]
+    weights = [1] * n
+    for i in range(n - 2, -1, -1):
+        weights[i] = weights[i + 1] * sizes[i + 1]
+
+    def decode(code: int) -> StateTuple:
+        out = [0] * n
+        for i in range(n - 1, -1, -1):
+            code, out[i] = divmod(code, sizes[i])
+        return tuple(out)
+
     if n == 0:
-        return [()], [], [0]
+        return [0], [], [], decode
 
     # Who owns each non-tau label: the components that must agree for it to fire.
     owners: dict[str, list[int]] = {}
@@ -89,35 +119,36 @@ def explore_product(
         for a in c.alphabet:
             owners.setdefault(a, []).append(i)
 
-    # Per component and state, precompute:
-    #   local[i][s]  : [(label, [targets])] for tau and labels owned only by component i
-    #   lead[i][s]   : [(label, [targets], other_owner_indices)] for shared labels whose lowest
+    # Per component and state, precompute (a delta is (target - source) * weight, None = ERROR):
+    #   local[i][s]  : [(label, delta)] for tau and labels owned only by component i
+    #   lead[i][s]   : [(label, [deltas], other_owner_indices)] for shared labels whose lowest
     #                  owner is i (the lowest owner "drives" the synchronisation)
-    #   lookup[i][s] : {label: [targets]} for shared labels (consulted by the driver)
-    local: list[list[list[tuple[str, list[int]]]]] = []
-    lead: list[list[list[tuple[str, list[int], list[int]]]]] = []
-    lookup: list[list[dict[str, list[int]]]] = []
+    #   lookup[i][s] : {label: [deltas]} for shared labels (consulted by the driver)
+    local: list[list[list[tuple[str, int | None]]]] = []
+    lead: list[list[list[tuple[str, list[int | None], list[int]]]]] = []
+    lookup: list[list[dict[str, list[int | None]]]] = []
     for i, c in enumerate(components):
-        by_state: list[dict[str, list[int]]] = [{} for _ in range(c.num_states)]
+        w = weights[i]
+        by_state: list[dict[str, list[int | None]]] = [{} for _ in range(sizes[i])]
         for s, a, t in c.transitions:
-            by_state[s].setdefault(a, []).append(t)
-        loc_i: list[list[tuple[str, list[int]]]] = []
-        lead_i: list[list[tuple[str, list[int], list[int]]]] = []
-        look_i: list[dict[str, list[int]]] = []
+            by_state[s].setdefault(a, []).append(None if t == ERROR else (t - s) * w)
+        loc_i: list[list[tuple[str, int | None]]] = []
+        lead_i: list[list[tuple[str, list[int | None], list[int]]]] = []
+        look_i: list[dict[str, list[int | None]]] = []
         for moves in by_state:
-            loc: list[tuple[str, list[int]]] = []
-            led: list[tuple[str, list[int], list[int]]] = []
-            look: dict[str, list[int]] = {}
-            for a, ts in moves.items():
+            loc: list[tuple[str, int | None]] = []
+            led: list[tuple[str, list[int | None], list[int]]] = []
+            look: dict[str, list[int | None]] = {}
+            for a, ds in moves.items():
                 own = owners.get(a)
                 if a == TAU or own is None or len(own) == 1:
                     # A label used on a transition but missing from the alphabet cannot happen
                     # for make_lts-built machines; treat it as private to stay total.
-                    loc.append((a, ts))
+                    loc.extend((a, d) for d in ds)
                 else:
-                    look[a] = ts
+                    look[a] = ds
                     if own[0] == i:
-                        led.append((a, ts, own[1:]))
+                        led.append((a, ds, own[1:]))
             loc_i.append(loc)
             lead_i.append(led)
             look_i.append(look)
@@ -125,58 +156,57 @@ def explore_product(
         lead.append(lead_i)
         lookup.append(look_i)
 
-    # Shared labels the lowest owner cannot drive because it has no move: nothing to do, the
-    # label is simply not enabled.  Shared labels with no transition in some owner never fire.
-
     prio_match: Callable[[str], bool] | None = None
     prio_high = False
     if priority is not None:
         labels, prio_high = priority
         prio_match = label_matcher(labels)
 
-    start: StateTuple = tuple(c.initial for c in components)
-    index: dict[StateTuple, int] = {start: 0}
-    order: list[StateTuple] = [start]
+    # END (§2.5): the terminating components (those with an END state) must all be in END, and
+    # every label of a non-terminating component must belong to a terminating one (so that
+    # nothing can move any more); with no terminating component there is no END at all.
+    ends = [c.end_states for c in components]
+    terminating = [i for i, c in enumerate(components) if c.end_states]
+    term_alpha: set[str] = set()
+    for i in terminating:
+        term_alpha |= components[i].alphabet
+    can_end = bool(terminating) and all(
+        c.alphabet <= term_alpha for c in components if not c.end_states)
+    start = sum(c.initial * weights[i] for i, c in enumerate(components))
+    index: dict[int, int] = {start: 0}
+    order: list[int] = [start]
     transitions: list[tuple[int, str, int]] = []
     end_states: list[int] = []
-    ends = [c.end_states for c in components]
+    comp_range = range(n)
 
     head = 0
     while head < len(order):
-        cur = order[head]
+        code = order[head]
         src = head
         head += 1
-        # Collect moves as (label, target tuple); ERROR is the empty tuple, which sorts before
-        # every real tuple, so a plain tuple sort gives the canonical visiting order.
-        moves: list[tuple[str, StateTuple]] = []
-        for i in range(n):
+        cur = decode(code)
+        moves: list[tuple[str, int]] = []
+        for i in comp_range:
             si = cur[i]
-            for a, ts in local[i][si]:
-                for t in ts:
-                    if t == ERROR:
-                        moves.append((a, ()))
-                    else:
-                        moves.append((a, cur[:i] + (t,) + cur[i + 1:]))
-            for a, ts, others in lead[i][si]:
-                choices: list[list[int]] = [ts]
-                ok = True
+            for a, d in local[i][si]:
+                moves.append((a, -1 if d is None else code + d))
+            for a, ds, others in lead[i][si]:
+                choices: list[list[int | None]] = [ds]
                 for j in others:
-                    tj = lookup[j][cur[j]].get(a)
-                    if tj is None:
-                        ok = False
+                    dj = lookup[j][cur[j]].get(a)
+                    if dj is None:
                         break
-                    choices.append(tj)
-                if not ok:
-                    continue
-                movers = (i, *others)
-                for combo in _cartesian(*choices):
-                    if ERROR in combo:
-                        moves.append((a, ()))
+                    choices.append(dj)
+                else:
+                    if len(choices) == 2 and len(ds) == 1 and len(choices[1]) == 1:
+                        d0, d1 = ds[0], choices[1][0]  # the common case, without itertools
+                        moves.append((a, -1 if d0 is None or d1 is None else code + d0 + d1))
                         continue
-                    nxt = list(cur)
-                    for k, t in zip(movers, combo, strict=True):
-                        nxt[k] = t
-                    moves.append((a, tuple(nxt)))
+                    for combo in _cartesian(*choices):
+                        if None in combo:
+                            moves.append((a, -1))
+                        else:
+                            moves.append((a, code + sum(combo)))  # type: ignore[arg-type]
         if prio_match is not None and moves:
             flagged = [prio_match(a) if a != TAU else False for a, _ in moves]
             if prio_high:
@@ -185,18 +215,18 @@ def explore_product(
             elif not all(flagged):
                 moves = [m for m, f in zip(moves, flagged, strict=True) if not f]
         if not moves:
-            if all(cur[i] in ends[i] for i in range(n)):
+            if can_end and all(cur[i] in ends[i] for i in terminating):
                 end_states.append(src)
             continue
         moves.sort()
         out: list[tuple[str, int]] = []
-        prev: tuple[str, StateTuple] | None = None
+        prev: tuple[str, int] | None = None
         for mv in moves:
             if mv == prev:  # duplicates are adjacent after sorting
                 continue
             prev = mv
             a, tgt = mv
-            if not tgt:
+            if tgt == -1:
                 out.append((a, ERROR))
                 continue
             k = index.get(tgt)
@@ -211,7 +241,7 @@ def explore_product(
         # transition list comes out globally sorted (the canonical LTS form) with no extra pass.
         out.sort()
         transitions.extend([(src, a, k) for a, k in out])
-    return order, transitions, end_states
+    return order, transitions, end_states, decode
 
 
 def compose(
@@ -226,15 +256,40 @@ def compose(
     The alphabet is the union of the component alphabets (labels that never fire included).
     An empty component list gives the one-state STOP-like machine with an empty alphabet.
     """
-    order, transitions, end_states = explore_product(
-        components, priority, max_states=max_states, name=name
-    )
+    order, transitions, end_states, _ = _explore(components, priority, max_states, name)
     alphabet: set[str] = set()
     for c in components:
         alphabet |= c.alphabet
         alphabet |= c.labels_used()  # only differs for machines not built by make_lts
     alphabet.discard(TAU)
-    # explore_product emits transitions sorted and unique and every label belongs to some
+    num_states = len(order)
+    if len(end_states) > 1:
+        transitions, num_states, end_states = _merge_ends(transitions, num_states, end_states)
+    # _explore emits transitions sorted and unique and every label belongs to some
     # component alphabet, so the canonical form holds without make_lts's re-sort.
-    return LTS(name, len(order), tuple(transitions), frozenset(alphabet), 0,
+    return LTS(name, num_states, tuple(transitions), frozenset(alphabet), 0,
                frozenset(end_states))
+
+
+def _merge_ends(
+    transitions: list[tuple[int, str, int]], num_states: int, end_states: list[int]
+) -> tuple[list[tuple[int, str, int]], int, list[int]]:
+    """Merge all END states into the first one (MTSA has a single END state, §2.5).
+
+    END states have no outgoing moves, so only targets change; the other states keep their
+    relative order, so the numbering stays deterministic.
+    """
+    keep = end_states[0]
+    drop = set(end_states[1:])
+    remap: list[int] = []
+    k = 0
+    for old in range(num_states):
+        if old in drop:
+            remap.append(-2)  # patched below, once the kept state's new index is known
+        else:
+            remap.append(k)
+            k += 1
+    for d in drop:
+        remap[d] = remap[keep]
+    merged = sorted({(remap[s], a, t if t == ERROR else remap[t]) for s, a, t in transitions})
+    return merged, k, [remap[keep]]

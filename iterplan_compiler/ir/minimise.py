@@ -10,6 +10,7 @@
 * :func:`strong_minimise` — quotient by strong bisimulation.
 * :func:`weak_minimise` — quotient by weak (observational) bisimulation; MTSA ``minimal``.
 * :func:`bisimilar` — strong or weak bisimilarity of two LTSs.
+* :func:`trace_difference` — a shortest trace where two LTSs differ (for error messages).
 
 ERROR is treated everywhere as one distinguished state with no moves, never equivalent to a
 real state (not even to STOP).  END states are distinguished from non-END states (END and STOP
@@ -31,6 +32,7 @@ __all__ = [
     "minimise",
     "strong_minimise",
     "tau_closure",
+    "trace_difference",
     "weak_minimise",
 ]
 
@@ -345,3 +347,49 @@ def bisimilar(a: LTS, b: LTS, weak: bool = False, *, same_alphabet: bool = True)
     init = [*_initial_classes(a), *_initial_classes(b), 2]
     block = _refine(succ, init)
     return block[a.initial] == block[na + b.initial]
+
+
+def trace_difference(a: LTS, b: LTS) -> tuple[tuple[str, ...], frozenset[str], frozenset[str]] | None:
+    """A shortest trace after which ``a`` and ``b`` offer different visible moves, or None.
+
+    Works on the determinised machines, so it finds *trace* differences (None for
+    trace-equivalent machines, even if they are not bisimilar).  An offer is a label ``x``, or
+    ``x->ERROR`` when the move enters ERROR, or ``END``.  The result ``(trace, only_a,
+    only_b)`` is meant for messages ("after [x, y] ExpectedC offers {z} but C does not").
+    """
+    da, db = determinise(a), determinise(b)
+    sa, sb = _successors(da), _successors(db)
+
+    def offers(m: LTS, succ: list[list[tuple[str, int]]], s: int) -> set[str]:
+        out = {x if t != ERROR else f"{x}->ERROR" for x, t in succ[s]}
+        if s in m.end_states:
+            out.add("END")
+        return out
+
+    start = (da.initial, db.initial)
+    parent: dict[tuple[int, int], tuple[tuple[int, int], str] | None] = {start: None}
+    queue = [start]
+    head = 0
+    while head < len(queue):
+        pa, pb = queue[head]
+        head += 1
+        oa, ob = offers(da, sa, pa), offers(db, sb, pb)
+        if oa != ob:
+            trace: list[str] = []
+            step = parent[(pa, pb)]
+            while step is not None:
+                prev, lab = step
+                trace.append(lab)
+                step = parent[prev]
+            trace.reverse()
+            return tuple(trace), frozenset(oa - ob), frozenset(ob - oa)
+        succ_b = dict(sb[pb])
+        for x, ta in sorted(sa[pa]):
+            tb = succ_b[x]
+            if ta == ERROR or tb == ERROR:
+                continue
+            nxt = (ta, tb)
+            if nxt not in parent:
+                parent[nxt] = ((pa, pb), x)
+                queue.append(nxt)
+    return None

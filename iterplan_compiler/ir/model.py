@@ -82,6 +82,9 @@ class ModelBackend:
     def controllable(self, name: str) -> frozenset[str]:  # pragma: no cover - interface
         raise NotImplementedError
 
+    def legality(self, name: str) -> tuple[bool, str]:  # pragma: no cover - interface
+        raise NotImplementedError
+
 
 @dataclass(frozen=True, eq=False)
 class Model:
@@ -139,3 +142,9 @@ class Model:
     def controllable(self, composite_name: str) -> frozenset[str]:
         """Controllable actions of the spec attached to a composite (empty if none)."""
         return self.backend.controllable(composite_name)
+
+    def legality(self, composite_name: str) -> tuple[bool, str]:
+        """MTSA's ``LegalityAnalyser`` on the composite's machine 0 (controller) and machine 1
+        (plant): ``(legal, detail)``; see ``Elaborator.legality`` for how the controllable set
+        is chosen."""
+        return self.backend.legality(composite_name)

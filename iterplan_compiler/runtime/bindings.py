@@ -19,8 +19,9 @@ controllable (canonical)             effect -> answer
 ``is.X`` / ``X``                     sensor X about the current location (the cell of the last
                                      arrival) -> ``yes.X`` / ``no.X``
 ``take.photo`` / ``photo``           records a photo (time, pose, cell)
-``takeoff`` / ``land``               vehicle take-off / landing; answered by ``takeoff.ended`` /
-                                     ``takeoff.complete`` / ``landed`` when the vehicle reports
+``takeoff`` / ``land``               vehicle take-off / landing; answered by ``takeoff.ended``
+                                     (``.complete``, ``.done``, ``airborne``) / ``landed`` when the
+                                     vehicle reports
 anything else                        instantaneous: logged, no answer
 ===================================  ==============================================================
 
@@ -56,7 +57,7 @@ Handler = Callable[["MissionContext", str], "str | Iterable[str] | None"]
 YES_NEXT = ("y.next", "yes.next")
 NO_NEXT = ("n.next", "no.next")
 ARRIVED = ("arrived",)
-TAKEOFF_DONE = ("takeoff.ended", "takeoff.complete", "takeoff.done")
+TAKEOFF_DONE = ("takeoff.ended", "takeoff.complete", "takeoff.done", "airborne")
 LANDED = ("landed",)
 
 
@@ -189,6 +190,7 @@ def _takeoff(ctx: MissionContext, label: str) -> None:
 
 
 def _land(ctx: MissionContext, label: str) -> None:
+    ctx.planner.stop()   # otherwise the next planner update steers the aircraft out of LAND
     ctx.vehicle.land()
 
 

@@ -18,7 +18,8 @@ iteration overhead the paper measures.  ``ideal_compute=True`` turns this off (d
 
 A mission ends when ``passes`` complete iterator passes have been answered (``n.next``), at the
 time limit, or early and *safely* (RTL or loiter, ``end_action``) on a refused event, a
-controller deadlock, a livelock (too many controllable steps without any answer), a planner
+controller deadlock, a livelock (many steps that neither wait for the vehicle nor move the
+iterator), a planner
 that cannot reach a cell, link loss, or a binding error.  Every event is logged with mission
 time and pose (up to ``log_limit`` entries; counters are always complete).
 """
@@ -57,18 +58,27 @@ class RunConfig:
     tick: float = 0.25              # physical time step while waiting (s)
     altitude: float | None = None   # default: the map's altitude
     turn_radius: float | None = None   # planning radius; default 1.4 x the vehicle's minimum
+    #: expected wind speed (m/s): the default planning radius grows to what the aircraft can fly
+    #: over ground downwind, 1.4 x r_min x ((V + wind) / V)^2
+    wind: float = 0.0
     parallel: bool = True           # arrive parallel to the fixed direction (either way)
     planner_mode: str = "course"
     lead: float | None = None
     accept: float | None = None
     end_action: str = "rtl"         # what a safe end commands: rtl, loiter or none
     log_limit: int = 200_000
-    livelock_limit: int = 5_000_000
+    livelock_limit: int = 100_000   # steps without waiting or iterator progress
     progress: Callable[[str], None] | None = None
     progress_every: float = 300.0   # mission seconds between progress lines
     track_every: float = 1.0        # mission seconds between track points
     choose: Callable[[Sequence[str]], str] | None = None
     auto_takeoff: bool = True       # take off before starting when the controller has no takeoff
+    #: clock for think time (wall by default; ``time.process_time`` makes charges independent
+    #: of machine load when several missions share the CPUs)
+    compute_clock: Callable[[], float] = time.perf_counter
+    #: called for every controller event as ``on_event(kind, label)`` with kind "c"
+    #: (controllable) or "u" (uncontrollable); returning True ends the mission successfully
+    on_event: Callable[[str, str], bool | None] | None = None
 
 
 @dataclass
@@ -101,7 +111,7 @@ class MissionResult:
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["t", "lat", "lon", "alt", "east", "north"])
-            for (t, x, y, a), la, lo in zip(self.track, np.atleast_1d(lat), np.atleast_1d(lon)):
+            for (t, x, y, a), la, lo in zip(self.track, np.atleast_1d(lat), np.atleast_1d(lon), strict=False):
                 w.writerow([f"{t:.2f}", f"{la:.7f}", f"{lo:.7f}", f"{a:.1f}", f"{x:.2f}",
                             f"{y:.2f}"])
 
@@ -117,7 +127,7 @@ class MissionResult:
         """Track as a LineString, arrivals and photos as Points (lon, lat), summary as props."""
         lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
         line = [[round(float(a), 7), round(float(b), 7)] for a, b in
-                zip(np.atleast_1d(lon), np.atleast_1d(lat))]
+                zip(np.atleast_1d(lon), np.atleast_1d(lat), strict=False)]
         feats = [{"type": "Feature", "properties": {"kind": "track", **self.summary},
                   "geometry": {"type": "LineString", "coordinates": line}}]
         for kind, rows in (("arrival", self.arrivals), ("photo", self.photos)):
@@ -136,27 +146,35 @@ class MissionResult:
     def write_summary(self, path: str | Path) -> None:
         Path(path).write_text(json.dumps(self.summary, indent=2, sort_keys=True) + "\n")
 
-    def plot(self, path: str | Path, *, max_cells: int = 200_000) -> None:
-        """PNG of the map (sensor cells shaded), the flown track, arrivals and photos."""
+    def plot(self, path: str | Path) -> None:
+        """PNG of the map (locations and sensor cells shaded), the flown track, arrivals and
+        photos.  Cells are drawn as one image, so maps of 10^6 cells plot quickly."""
         import matplotlib  # lazy: the aircraft never needs it
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        from matplotlib.patches import Rectangle
+        from matplotlib.colors import to_rgba
+        from matplotlib.patches import Patch
 
         g = self.grid
-        fig, ax = plt.subplots(figsize=(8, 8 * g.rows / max(g.cols, 1) + 0.5), dpi=100)
+        fig, ax = plt.subplots(figsize=(8, min(16.0, 8 * g.rows / max(g.cols, 1) + 0.5)),
+                               dpi=100)
+        img = np.ones((g.rows, g.cols, 4), dtype=np.float32)
+        img[..., 3] = 0.0
+        loc = np.zeros(g.num_cells, dtype=bool)
+        loc[g.cells] = True
+        img.reshape(-1, 4)[loc] = to_rgba("#eeeeee")
         colours = ["#f5a623", "#d0021b", "#4a90e2", "#7ed321", "#9013fe"]
         handles = []
         for i, (name, ids) in enumerate(sorted(g.sensors.items())):
-            if len(ids) > max_cells:
-                continue
-            xs, ys = g.centres(ids)
-            col = colours[i % len(colours)]
-            for x, y in zip(xs, ys):
-                ax.add_patch(Rectangle((x - g.cell_size / 2, y - g.cell_size / 2), g.cell_size,
-                                       g.cell_size, color=col, alpha=0.35, lw=0))
-            handles.append(Rectangle((0, 0), 1, 1, color=col, alpha=0.35, label=name))
+            col = to_rgba(colours[i % len(colours)], 0.45)
+            flat = img.reshape(-1, 4)
+            # Blend over what is there, so overlapping sensor sets stay visible.
+            flat[ids, :3] = flat[ids, :3] * (1 - col[3]) + np.asarray(col[:3]) * col[3]
+            flat[ids, 3] = np.maximum(flat[ids, 3], 0.6)
+            handles.append(Patch(color=col, label=name))
+        ax.imshow(img, origin="lower", interpolation="nearest",
+                  extent=(0, g.cols * g.cell_size, 0, g.rows * g.cell_size))
         ax.plot(self.track[:, 1], self.track[:, 2], "-", color="#333333", lw=0.8, label="track")
         if self.arrivals:
             a = np.asarray([(x, y) for _, _, x, y in self.arrivals])
@@ -171,8 +189,9 @@ class MissionResult:
         ax.set_xlabel("east (m)")
         ax.set_ylabel("north (m)")
         s = self.summary
+        oh = s.get("overhead_pct")
         ax.set_title(f"{g.name}: {s.get('duration_s', 0):.0f} s, {s.get('distance_m', 0):.0f} m, "
-                     f"overhead {s.get('overhead_pct', float('nan')):.0f} %")
+                     f"overhead {'n/a' if oh is None else f'{oh:.0f} %'}")
         ax.legend(handles=handles + ax.get_legend_handles_labels()[0], loc="upper right",
                   fontsize=7)
         fig.tight_layout()
@@ -245,7 +264,8 @@ class Executor:
         self.vehicle = vehicle
         self.cfg = config or RunConfig()
         self.altitude = self.cfg.altitude if self.cfg.altitude is not None else grid.altitude
-        radius = self.cfg.turn_radius or 1.4 * vehicle.min_turn_radius
+        gust = max(0.0, self.cfg.wind) / max(vehicle.airspeed, 1.0)
+        radius = self.cfg.turn_radius or 1.4 * vehicle.min_turn_radius * (1.0 + gust) ** 2
         self.radius = radius
         self.planner = MotionPlanner(vehicle, radius=radius,
                                      arrival_heading=grid.arrival_heading,
@@ -272,18 +292,19 @@ class Executor:
         self.arrivals: list[tuple[float, int, float, float]] = []
         self.track: list[tuple[float, float, float, float]] = []
         self.counts = {"steps": 0, "controllable": 0, "uncontrollable": 0, "go": 0,
-                       "arrived": 0, "passes": 0, "logged": 0}
+                       "arrived": 0, "passes": 0}
         self.compute_s = 0.0
-        self._debt = 0.0
+        self._mark = self.cfg.compute_clock()   # start of the current think period
         self.t0 = vehicle.time
         self._waiting: dict[str, str] = {}    # vehicle/planner event kind -> answer label
         self._pending: deque[str] = deque()
         self._next_progress = 0.0
+        self._steps_since_tick = 0
+        self._pass_marks: list[int] = []     # len(arrivals) at the end of each pass
         self._last_track = -1e9
 
     # -- bookkeeping ------------------------------------------------------------------------
     def log_entry(self, kind: str, label: str, cell: int = -1) -> None:
-        self.counts["logged"] += 1
         if len(self.log) >= self.cfg.log_limit:
             return
         p = self.vehicle.pose()
@@ -291,13 +312,25 @@ class Executor:
                                  p.x, p.y, p.alt, cell))
 
     def settle_compute(self) -> None:
-        """Charge the measured think time to the simulated clock (see module docstring)."""
-        if self._debt <= 0:
+        """Charge the measured think time to the simulated clock (see module docstring).
+
+        The aircraft and the motion planner run concurrently with the plan in reality, so the
+        debt is flown in ``tick``-sized slices with the planner following its path; events
+        raised meanwhile (``arrived``...) are queued like any other."""
+        clock = self.cfg.compute_clock
+        now = clock()
+        debt = now - self._mark
+        self._mark = now
+        if debt <= 0:
             return
-        self.compute_s += self._debt
-        if not self.cfg.ideal_compute and self.vehicle.is_simulated:
-            self.vehicle.advance(self._debt)
-        self._debt = 0.0
+        self.compute_s += debt
+        if self.cfg.ideal_compute or not self.vehicle.is_simulated:
+            return
+        while debt > 1e-12:
+            dt = min(self.cfg.tick, debt)
+            self._physical_tick(dt)
+            debt -= dt
+        self._mark = clock()  # the simulator's own run time is not plan time
 
     def _record_track(self, force: bool = False) -> None:
         p = self.vehicle.pose()
@@ -342,9 +375,8 @@ class Executor:
                     raise MissionEnd(False, f"take-off failed: {e.kind} {e.detail}")
         raise MissionEnd(False, "take-off did not complete within 600 s")
 
-    def _physical_tick(self) -> None:
-        self.settle_compute()
-        self.vehicle.advance(self.cfg.tick)
+    def _physical_tick(self, dt: float) -> None:
+        self.vehicle.advance(dt)
         self._record_track()
         for pe in self.planner.update():
             self.log_entry("p", f"{pe.kind} {pe.detail}", self.ctx.target_cell or -1)
@@ -388,6 +420,8 @@ class Executor:
             ok, reason = False, f"binding error: {exc}"
         if not ok:
             self.log_entry("x", f"safe end: {reason}")
+            if self.cfg.end_action != "none":
+                self.planner.stop()      # stop steering, so the autopilot's mode sticks
             if self.cfg.end_action == "rtl":
                 v.rtl()
             elif self.cfg.end_action == "loiter":
@@ -399,58 +433,94 @@ class Executor:
                              self.photos, self.arrivals, self.grid, dict(self.counts))
 
     def _loop(self) -> None:
+        # Hot loop (millions of steps per pass on big maps): locals, no per-step clock reads.
         ctrl = self.controller
         v = self.vehicle
         cfg = self.cfg
+        counts = self.counts
         pending = self._pending
-        streak = 0
-        perf = time.perf_counter
+        perf = cfg.compute_clock
+        on_event = cfg.on_event
+        limit = cfg.livelock_limit
         uncontrollable = self.table.uncontrollable
+        no_next = self.no_next
+        bindings = self.bindings
+        ctx = self.ctx
+        log = self.log
+        log_limit = cfg.log_limit
+        delta = self.table.delta
+        controllable = self.table.controllable
+        choices = {s: sorted(a for a in m if a in controllable) for s, m in delta.items()}
+        progress_kinds = ("remove.next", "reset", "go.next")
+        since = 0           # steps since the last wait or iterator progress (livelock guard)
+        n = 0
+        self._mark = perf()
         while True:
-            if v.time - self.t0 > cfg.max_time:
-                raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+            n += 1
+            if not n & 511:
+                if perf() - self._mark > cfg.tick:
+                    self.settle_compute()
+                    self._progress()
+                if v.time - self.t0 > cfg.max_time:
+                    raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
             if pending:
-                t = perf()
                 label = pending.popleft()
                 try:
                     ctrl.step(label)
                 except RefusedEvent as exc:
                     raise MissionEnd(False, f"unexpected event: {exc}") from None
-                self.counts["steps"] += 1
-                self.counts["uncontrollable"] += 1
-                streak = 0
-                self._debt += perf() - t
-                self.log_entry("u", label)
-                if label in self.no_next:
-                    self.counts["passes"] += 1
-                    if cfg.passes and self.counts["passes"] >= cfg.passes:
+                counts["steps"] += 1
+                counts["uncontrollable"] += 1
+                if len(log) < log_limit:
+                    self.log_entry("u", label)
+                if on_event is not None and on_event("u", label):
+                    raise MissionEnd(True, f"stopped by on_event at {label}")
+                if label in no_next:
+                    counts["passes"] += 1
+                    self._pass_marks.append(len(self.arrivals))
+                    if cfg.passes and counts["passes"] >= cfg.passes:
                         self.settle_compute()
                         return
                 continue
-            enabled = ctrl.enabled_controllable()
+            enabled = choices[ctrl.state]
             if enabled:
-                t = perf()
                 label = cfg.choose(enabled) if cfg.choose else enabled[0]
                 ctrl.step(label)
-                b: Binding = self.bindings[label]
-                self.log_entry("c", label)
-                self._answer(b.handler(self.ctx, label))
+                b: Binding = bindings[label]
+                if len(log) < log_limit:
+                    self.log_entry("c", label)
+                if on_event is not None and on_event("c", label):
+                    raise MissionEnd(True, f"stopped by on_event at {label}")
+                out = b.handler(ctx, label)
+                if out is not None:
+                    if out.__class__ is str and out in uncontrollable:
+                        pending.append(out)
+                    else:
+                        self._answer(out)
                 if b.completes_on and b.answer:
                     self._waiting[b.completes_on] = b.answer
-                self.counts["steps"] += 1
-                self.counts["controllable"] += 1
-                self._debt += perf() - t
-                streak += 1
-                if streak > cfg.livelock_limit:
-                    raise MissionEnd(False, "livelock: the controller keeps acting without any "
-                                            "answer from the environment")
+                counts["steps"] += 1
+                counts["controllable"] += 1
+                if b.kind in progress_kinds:
+                    since = 0
+                else:
+                    since += 1
+                    if since > limit:
+                        raise MissionEnd(False, f"livelock: {limit} controller steps without "
+                                                f"waiting for the vehicle or moving the "
+                                                f"iterator")
                 continue
             if not ctrl.enabled():
                 raise MissionEnd(False, f"controller deadlocked in state {ctrl.state}")
             if not self._waiting:
                 exp = ", ".join(sorted(ctrl.enabled() & uncontrollable))
                 raise MissionEnd(False, f"controller waits for {exp}, which nothing will produce")
-            self._physical_tick()
+            if v.time - self.t0 > cfg.max_time:
+                raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+            self.settle_compute()
+            self._physical_tick(cfg.tick)
+            self._mark = perf()
+            since = 0
             self._progress()
 
     def _summary(self, ok: bool, reason: str) -> dict:
@@ -460,8 +530,17 @@ class Executor:
         m = tr[:, 0] >= 0
         seg = np.hypot(np.diff(tr[m, 1]), np.diff(tr[m, 2])) if m.sum() > 1 else np.zeros(0)
         distance = float(seg.sum())
-        ideal = ideal_distance([(x, y) for _, _, x, y in self.arrivals],
-                               start=tuple(tr[m][0, 1:3]) if m.any() else self.grid.home)
+        # Per iterator pass (a cell is visited once per pass), chained: each pass starts where
+        # the previous one ended.
+        pts = [(x, y) for _, _, x, y in self.arrivals]
+        start = tuple(tr[m][0, 1:3]) if m.any() else self.grid.home
+        ideal = 0.0
+        lo = 0
+        for hi in [*self._pass_marks, len(pts)]:
+            if hi > lo:
+                ideal += ideal_distance(pts[lo:hi], start=start)
+                start = pts[hi - 1]
+            lo = hi
         speed = self.vehicle.airspeed
         ideal_t = ideal / speed if speed > 0 else float("nan")
         overhead = (duration - ideal_t) / ideal_t * 100 if ideal_t > 0 else float("nan")

@@ -59,7 +59,7 @@ class DubinsPath:
     @property
     def end_heading(self) -> float:
         h = self.start.heading
-        for seg, ln in zip(self.word, self.segments):
+        for seg, ln in zip(self.word, self.segments, strict=False):
             if seg == "L":
                 h += ln / self.radius
             elif seg == "R":
@@ -71,7 +71,7 @@ class DubinsPath:
         xs, ys, hs = [self.start.x], [self.start.y], [self.start.heading]
         x, y, h = self.start.x, self.start.y, self.start.heading
         r = self.radius
-        for seg, ln in zip(self.word, self.segments):
+        for seg, ln in zip(self.word, self.segments, strict=False):
             if ln <= 1e-9:
                 continue
             n = max(1, math.ceil(ln / ds))
@@ -199,6 +199,12 @@ class MotionPlanner:
         self._ph = np.concatenate([hs, np.full(len(ext), self.heading)])
         self._idx = 0
         self.arrived = False
+
+    def stop(self) -> None:
+        """Stop following (before land/RTL/loiter, so no further steering overrides them)."""
+        self.path = None
+        self.target = None
+        self.arrived = True
 
     # -- following ------------------------------------------------------------------------------
     def update(self) -> list[PlannerEvent]:

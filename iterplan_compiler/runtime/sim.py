@@ -109,7 +109,8 @@ class SimVehicle(Vehicle):
         self.course_cmd = self.psi
 
     def goto(self, x, y, alt=None, radius=None) -> None:
-        if self.mode in ("IDLE", "LANDED", "TAKEOFF"):
+        # Allowed during the take-off climb (GUIDED takes over; the climb continues).
+        if self.mode in ("IDLE", "LANDED"):
             self._emit("rejected", f"goto refused in mode {self.mode}")
             return
         self.mode = "GUIDED"
@@ -120,7 +121,7 @@ class SimVehicle(Vehicle):
         self.captured = False
 
     def steer(self, course: float) -> None:
-        if self.mode in ("IDLE", "LANDED", "TAKEOFF"):
+        if self.mode in ("IDLE", "LANDED"):
             self._emit("rejected", f"steer refused in mode {self.mode}")
             return
         self.mode = "COURSE"
@@ -139,9 +140,11 @@ class SimVehicle(Vehicle):
             return
         self.mode = "LAND"
         self.target = self.home
+        self.radius = self.p.loiter_radius
+        self.captured = False
 
     def loiter(self) -> None:
-        if self.mode in ("IDLE", "LANDED", "TAKEOFF"):
+        if self.mode in ("IDLE", "LANDED"):
             return
         # Circle a point one radius to the right of the current track.
         r = self.p.loiter_radius

@@ -83,11 +83,7 @@ class BitVec:
         """BDD of ``self == value`` (``value`` must fit in ``width`` bits)."""
         if value < 0 or value >= (1 << self.width):
             raise ValueError(f"{value} does not fit in {self.width} bits")
-        u = bdd.true
-        for k, name in enumerate(self.names):
-            v = bdd.var(name)
-            u &= v if (value >> k) & 1 else ~v
-        return u
+        return bdd.cube(self.assign(value))
 
     def assign(self, value: int) -> dict[str, bool]:
         """The variable assignment encoding ``value``."""
@@ -147,6 +143,23 @@ def enumerate_values(bdd: Manager, u: Node, vec: BitVec) -> list[int]:
     proj = bdd.exist(others, u) if others else u
     out = {vec.decode(a) for a in bdd.pick_iter(proj, care_vars=set(vec.names))}
     return sorted(out)
+
+
+def disjoin(bdd: Manager, nodes: Sequence[Node]) -> Node:
+    """OR of ``nodes`` by balanced pairwise reduction.
+
+    Folding left-to-right ORs every small term into one ever-growing BDD (quadratic work);
+    a balanced tree keeps the operands of similar size.
+    """
+    layer = list(nodes)
+    if not layer:
+        return bdd.false
+    while len(layer) > 1:
+        nxt = [layer[i] | layer[i + 1] for i in range(0, len(layer) - 1, 2)]
+        if len(layer) % 2:
+            nxt.append(layer[-1])
+        layer = nxt
+    return layer[0]
 
 
 def cube(bdd: Manager, assignment: dict[str, bool]) -> Node:

@@ -18,7 +18,12 @@ from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.ir.lts import LTS, renamed
 from iterplan_compiler.ir.model import SynthesisProblem
 from iterplan_compiler.synthesis import explicit as _explicit
-from iterplan_compiler.synthesis.encode import GameSpec, SynthesisError, prepare
+from iterplan_compiler.synthesis.encode import (
+    GameSpec,
+    PreconditionFailure,
+    SynthesisError,
+    prepare,
+)
 from iterplan_compiler.synthesis.strategy import (
     extract_controller,
     extract_director,
@@ -71,7 +76,7 @@ def synthesize(
     explain: bool = True,
     minimise: bool = True,
     max_states: int | None = 2_000_000,
-    order: str = "action_first",
+    order: str = "clustered",
 ) -> SynthesisResult:
     """Solve ``problem`` (§3) and build its controller; never raises for bad specs.
 
@@ -90,6 +95,12 @@ def synthesize(
     except SynthesisError as e:
         return SynthesisResult(False, None, None, e.message, stats,
                                (error(e.code, e.message, problem.span),))
+    except PreconditionFailure as e:
+        # MTSA prints the message and leaves no composition: the verdict is "no controller"
+        stats["precondition"] = str(e)
+        return SynthesisResult(False, None, None,
+                               f"unrealizable: heuristic synthesis refused the problem: {e}",
+                               stats)
     stats["mode"] = spec.mode
     stats["warnings"] = list(spec.warnings)
     stats["t_prepare"] = time.perf_counter() - t0
@@ -113,15 +124,17 @@ def synthesize(
     controller = renamed(controller, f"{name}:controller" if name else "controller")
     stats["controller_states"] = controller.num_states
     stats["controller_transitions"] = controller.num_transitions
-    others = list(problem.plant[1:]) + (list(problem.safety) if _keeps_safety(problem) else [])
+    if problem.keywords & {"heuristic", "monolithicDirector"}:
+        # §3.7: the DCS/director composite is the controller alone (the tests then build
+        # `||Sys = (DirectedController || Plant)` themselves)
+        others: list[LTS] = []
+    else:
+        # §3.6: the controller replaces the environment among the composite's machines
+        others = list(problem.plant[1:]) + list(problem.safety)
     composition = _compose([controller, *others], name) if others else renamed(controller, name)
     stats["composition_states"] = composition.num_states
     stats["t_extract"] = stats.get("t_extract", 0.0) + time.perf_counter() - t1
     return SynthesisResult(True, controller, composition, "", stats)
-
-
-def _keeps_safety(problem: SynthesisProblem) -> bool:
-    return not ("monolithicDirector" in problem.keywords and problem.nonblocking)
 
 
 def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
@@ -169,4 +182,51 @@ def _explain(spec: GameSpec, game: _explicit.ExplicitGame, win: frozenset[int],
         return "unrealizable: the initial state is not winning"
     from iterplan_compiler.synthesis.explain import explain_losing
 
-    return explain_losing(spec, game, win)
+    try:
+        return explain_losing(spec, game, win)
+    except Exception as exc:  # noqa: BLE001 - an explanation bug must not hide the verdict
+        return f"unrealizable: the initial state is not winning (no trace: {exc})"
+
+
+def check_compatibility(problem: SynthesisProblem, *, solver: str = "symbolic"
+                        ) -> tuple[bool, str]:
+    """MTSA's ``checkCompatibility`` (§3.11): are the assumptions compatible with the plant?
+
+    The actions that initiate failure fluents become controllable, the guarantees are replaced
+    by FALSE, and the GR(1) game is solved: the assumptions are compatible iff **no** reachable
+    state is winning, i.e. the controller can never force a violation of the assumptions.
+    Returns ``(compatible, message)`` with MTSA's wording.
+    """
+    from dataclasses import replace
+
+    from iterplan_compiler.ir.formulas import Const, FluentProp
+
+    fl = {f.name: f for f in problem.fluents}
+    faults: set[str] = set()
+    for f in problem.failures:
+        if isinstance(f, FluentProp) and f.name in fl:
+            faults |= fl[f.name].initiating
+    p = replace(problem, keywords=problem.keywords - {"heuristic"},
+                controllable=problem.controllable | faults, guarantees=(Const(False),),
+                failures=())
+    spec = prepare(p, mode="gr1")
+    if solver == "explicit":
+        game = _explicit.build_game(spec)
+        winning = bool(_explicit.winning_region(game))
+    else:
+        from iterplan_compiler.synthesis.fixpoint import gr1_winning
+        from iterplan_compiler.synthesis.game import SymbolicGame
+
+        g = SymbolicGame(spec)
+        reach = g.reachable()
+        fp = gr1_winning(g.bdd, g.cpre, g.assumptions, g.guarantees, care=reach)
+        winning = (fp.winning & reach) != g.bdd.false
+    if winning:
+        return False, "The assumptions are NOT compatible with the given environment."
+    return True, "The assumptions are compatible with the given environment.[FSE2010]"
+
+
+def plant_product(problem: SynthesisProblem) -> LTS:
+    """MTSA's ``plant ||P = E~{G}``: the fluent-embedded product of §3.2 step 6."""
+    spec = prepare(problem, mode="gr1")
+    return _explicit.compose_explicit(spec.components, problem.name)

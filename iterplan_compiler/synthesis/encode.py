@@ -35,6 +35,11 @@ from iterplan_compiler.ir.lts import LTS, TAU, make_lts
 from iterplan_compiler.ir.model import SynthesisProblem
 
 
+class PreconditionFailure(Exception):
+    """MTSA's DCS (``heuristic``) refuses the problem: it prints a message and the composite is
+    null, which the test-suites read as *unrealizable* (§3.7, §3.9)."""
+
+
 class SynthesisError(Exception):
     """A problem that cannot be solved as stated (a user error, reported as a diagnostic)."""
 
@@ -149,6 +154,8 @@ def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
         assumptions = tuple(convert(a) for a in problem.assumptions)
         guarantees = tuple(convert(g) for g in problem.guarantees)
         failures = tuple(convert(f) for f in problem.failures)
+    if "heuristic" in kw:
+        _dcs_preconditions(problem, used, plant_alpha)
     names = tuple(sorted(used))
     monitors = tuple(fluent_monitor(used[n]) for n in names)
     for n in names:
@@ -159,6 +166,26 @@ def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
     return GameSpec(problem.name, plant + safety + monitors, len(plant), len(safety), names,
                     frozenset(problem.controllable), assumptions, guarantees, failures, mode,
                     tuple(warnings))
+
+
+def _dcs_preconditions(problem: SynthesisProblem, used: Mapping[str, Fluent],
+                       plant_alpha: set[str]) -> None:
+    """The checks of MTSA's ``hcs`` entry (§3.9); raise :class:`PreconditionFailure`."""
+    if problem.failures:
+        raise PreconditionFailure("Failure tag is not supported for heuristic analysis")
+    has_marking = bool(problem.marking)
+    if bool(problem.guarantees) == has_marking:
+        raise PreconditionFailure("heuristic synthesis needs exactly one of liveness / marking")
+    if has_marking and len(problem.assumptions) > 1:
+        raise PreconditionFailure("heuristic synthesis with marking allows one assumption")
+    for fl in used.values():
+        if fl.name == "_Goal":
+            continue
+        extra = (fl.initiating | fl.terminating) - plant_alpha
+        if extra:
+            raise PreconditionFailure(
+                "Assumptions and Guarantees cant include actions that are not permited by the "
+                f"plant ({', '.join(sorted(extra))})")
 
 
 def evaluate(f: Formula, val: Mapping[str, Any], *, true: Any = True, false: Any = False,

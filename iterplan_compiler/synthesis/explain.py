@@ -6,10 +6,12 @@ The environment wins from the initial state.  We report
 * if the environment can *force* a dead end (ERROR = a violated safety property, a deadlock,
   or a controller state without controllable moves): a shortest forcing trace, where at every
   controller-owned state all its alternatives are listed (they all lose too);
-* otherwise, a guarantee ``G_j`` the environment can avoid forever: a forcing prefix into a
-  trap that avoids ``G_j`` (and failures), plus a cycle inside it, and which assumptions that
-  cycle visits (if it misses one, the environment's real strategy must interleave them —
-  GR(1) counter-strategies are not always a single lasso).
+* otherwise, a guarantee ``G_j`` the environment can avoid forever *while satisfying every
+  assumption*: the largest set of losing non-``G_j`` states where the environment can stay and
+  still force visits to every ``A_i`` (a generalised Büchi game for the environment), a
+  forcing prefix into it, and one round of the environment's loop visiting each ``A_i``;
+* if no single guarantee works (the environment must adapt which guarantee it blocks), the
+  first losing states.
 """
 
 from __future__ import annotations
@@ -88,6 +90,56 @@ def _forcing_trace(spec: GameSpec, game: ExplicitGame, layer: dict[int, int], st
     return lines
 
 
+def _env_can_stay(game: ExplicitGame, s: int, Z: set[int]) -> bool:
+    ctrl = game.controllable
+    if game.env[s]:
+        return any(a not in ctrl and t in Z for a, t in game.edges[s])
+    cs = [t for a, t in game.edges[s] if a in ctrl]
+    return bool(cs) and all(t in Z for t in cs)
+
+
+def _env_buchi(game: ExplicitGame, region: set[int], assumptions: list[frozenset[int]]
+               ) -> set[int]:
+    """Largest ``Z ⊆ region`` where the environment can stay forever and force a visit to
+    every assumption set again and again (generalised Büchi for the environment)."""
+    Z = set(region)
+    while True:
+        new = set(Z)
+        for a in assumptions:
+            target = {s for s in Z if s in a and _env_can_stay(game, s, Z)}
+            new &= set(_env_pre_layers(game, target, Z))
+        if new == Z:
+            return Z
+        Z = new
+
+
+def _step(game: ExplicitGame, layer: dict[int, int], s: int, within: set[int] | None = None
+          ) -> int:
+    """The environment's move (or the controller's first alternative) decreasing ``layer``."""
+    ctrl = game.controllable
+    ok = within if within is not None else layer
+    if game.env[s]:
+        cands = [(layer.get(t, 1 << 30), a, t) for a, t in game.edges[s]
+                 if a not in ctrl and t in ok]
+    else:
+        cands = [(layer.get(t, 1 << 30), a, t) for a, t in game.edges[s] if a in ctrl]
+    if not cands:  # defensive: callers only step from states with a move
+        raise ValueError(f"state {s} has no move")
+    return min(cands)[2]
+
+
+def _move_text(spec: GameSpec, game: ExplicitGame, layer: dict[int, int], s: int,
+               within: set[int] | None = None) -> str:
+    ctrl = game.controllable
+    ok = within if within is not None else layer
+    if game.env[s]:
+        _, a, _ = min((layer.get(t, 1 << 30), a, t) for a, t in game.edges[s]
+                      if a not in ctrl and t in ok)
+        return f"{describe_state(spec, game, s)}  environment plays {a}"
+    alts = ", ".join(sorted({a for a, _ in game.edges[s] if a in ctrl}))
+    return f"{describe_state(spec, game, s)}  controller picks one of {{{alts}}} (all lose)"
+
+
 def explain_losing(spec: GameSpec, game: ExplicitGame, win: frozenset[int]) -> str:
     """Text explaining why ``game.initial`` is losing (``win`` = winning region)."""
     n = game.num_states
@@ -105,44 +157,37 @@ def explain_losing(spec: GameSpec, game: ExplicitGame, win: frozenset[int]) -> s
         return "\n".join(out)
     goals = [g | game.failures for g in game.guarantees]
     for j, g in enumerate(goals):
-        avoid = losing - g
-        # trap: greatest set inside avoid where the environment can stay
-        trap = set(avoid)
-        while True:
-            keep = set()
-            for s in trap:
-                if game.env[s]:
-                    if any(a not in game.controllable and t in trap for a, t in game.edges[s]):
-                        keep.add(s)
-                else:
-                    cs = [t for a, t in game.edges[s] if a in game.controllable]
-                    if cs and all(t in trap for t in cs):
-                        keep.add(s)
-            if keep == trap:
-                break
-            trap = keep
-        if not trap:
+        core = _env_buchi(game, losing - g - dead, game.assumptions)
+        if not core:
             continue
-        attr = _env_pre_layers(game, trap, losing)
+        attr = _env_pre_layers(game, core, losing)
         if game.initial not in attr:
             continue
-        out.append(f"the environment can keep the play away from guarantee #{j + 1} forever:")
-        out += _forcing_trace(spec, game, attr, game.initial, trap)
-        # a cycle inside the trap, following the environment's first staying move
-        s = next(iter(sorted(trap))) if game.initial not in trap else game.initial
-        seen: list[int] = []
-        while s not in seen and len(seen) < MAX_STEPS:
-            seen.append(s)
-            nxt = sorted(t for a, t in game.edges[s] if t in trap
-                         and (a not in game.controllable) == game.env[s])
-            s = nxt[0]
-        cyc = seen[seen.index(s):] if s in seen else seen
-        out.append(f"  ... and then it can loop through {len(cyc)} state(s) avoiding it:")
-        out += [f"    {describe_state(spec, game, c)}" for c in cyc]
-        missed = [i + 1 for i, a in enumerate(game.assumptions) if not (set(cyc) & a)]
-        if missed and spec.assumptions:
-            out.append(f"  (this loop misses assumption(s) {missed}; the environment's "
-                       "strategy must also satisfy them elsewhere in the losing region)")
+        out.append(f"the environment can keep the play away from guarantee #{j + 1} forever "
+                   "while satisfying every assumption:")
+        out += _forcing_trace(spec, game, attr, game.initial, core)
+        s = game.initial
+        while s not in core:  # replay the forcing prefix to know where the loop starts
+            s = _step(game, attr, s)
+        out.append(f"  then, inside {len(core)} state(s) that avoid it, the environment "
+                   "visits each assumption in turn:")
+        for i, a in enumerate(game.assumptions):
+            target = {t for t in core if t in a and _env_can_stay(game, t, core)}
+            lay = _env_pre_layers(game, target, core)
+            steps = 0
+            while s not in target and s in lay and steps < MAX_STEPS:
+                out.append("    " + _move_text(spec, game, lay, s))
+                s = _step(game, lay, s)
+                steps += 1
+            if s not in target:
+                break
+            label = f"assumption #{i + 1} holds here" if spec.assumptions else "loop point"
+            out.append(f"    {describe_state(spec, game, s)}  <- {label}")
+            # one move that stays inside the core
+            stay = {t: 0 for t in core}
+            out.append("    " + _move_text(spec, game, stay, s, within=core))
+            s = _step(game, stay, s, within=core)
+        out.append("    ... and repeats, so the guarantee is never reached.")
         return "\n".join(out)
     out.append("the environment wins by alternating between assumption-satisfying loops that "
                "avoid some guarantee; losing states (first 10):")

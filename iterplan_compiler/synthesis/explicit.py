@@ -56,11 +56,14 @@ def _component_index(c: LTS) -> dict[int, dict[str, list[int]]]:
 
 
 def explore_product(
-    components: Sequence[LTS], *, max_states: int | None = None
+    components: Sequence[LTS], *, max_states: int | None = None,
+    expand: Callable[[tuple[int, ...]], bool] | None = None,
 ) -> tuple[list[tuple[int, ...]], list[list[tuple[str, int]]], frozenset[str]]:
     """Reachable synchronous product (§2.5), BFS order; target ``ERROR`` (-1) for error moves.
 
     Returns ``(tuples, edges, alphabet)`` where ``edges[k]`` holds ``(label, target_index)``.
+    With ``expand``, only tuples for which it is True are expanded (the others get an index
+    but no edges) — used to explore just the winning part of a game.
     """
     idx = [_component_index(c) for c in components]
     alphabet: set[str] = set()
@@ -79,6 +82,9 @@ def explore_product(
         cur = tuples[i]
         i += 1
         out: list[tuple[str, int]] = []
+        if expand is not None and not expand(cur):
+            edges.append(out)
+            continue
         moves: list[tuple[str, tuple[int, ...] | None]] = []
         for a in actions:
             parts = owners[a]

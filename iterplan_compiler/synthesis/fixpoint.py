@@ -23,13 +23,19 @@ computes the winning region of the game whose controllable predecessor operator 
   cumulative: ``y_layers[j][0]`` is the first iterate) and the ``νX`` sets
   (``x_sets[j][r][i]``) needed to extract a memoryful strategy (Bloem et al. 2012, §5).
 
-Optimisations (both sound by monotonicity):
+Optimisations (all sound by monotonicity):
+
+* all iterates are intersected with the current ``Z`` (and so with ``care``): the greatest
+  fixpoint is unchanged (see ``_mu_y``) and the BDDs carry no junk outside ``Z``;
 
 * *fixpoint recycling* — during the outer ``νZ`` iteration ``Z`` decreases, so the ``r``-th
   ``μY`` iterate and every ``νX`` value decrease too; the ``νX`` for ``(j, r, i)`` therefore
   starts from its value in the previous ``Z`` round (intersected with ``Z``) instead of ``Z``.
 * the ``μY`` loop stops as soon as ``Y == Z`` (it cannot grow beyond ``Z``); the ``νZ`` loop
   stops on ``must_contain``.
+* ``cpre`` results are memoised per argument node for the duration of one call (``CPre(Z)``
+  is the first ``νX`` step for every ``(r, i)``; canonical BDD nodes make the cache exact).
+  Pass ``memo=False`` if ``cpre`` is not a pure function of its argument.
 
 Sets are plain ``dd`` nodes; equality tests are O(1) on canonical BDDs.
 """
@@ -70,8 +76,19 @@ def gr1_winning(
     keep_iterates: bool = False,
     must_contain: Node | None = None,
     progress: Callable[[str], None] | None = None,
+    memo: bool = True,
 ) -> Gr1Fixpoint:
     """Winning region of the GR(1) game ``(∧_i GF A_i) → (∧_j GF G_j)``; see the module doc."""
+    if memo:
+        raw_cpre = cpre
+        cache: dict[Node, Node] = {}
+
+        def cpre(X: Node) -> Node:
+            r = cache.get(X)
+            if r is None:
+                r = cache[X] = raw_cpre(X)
+            return r
+
     top = bdd.true if care is None else care
     A = list(assumptions) or [bdd.true]
     G = list(guarantees) or [bdd.true]
@@ -118,21 +135,25 @@ def _mu_y(
     stats: dict[str, int],
 ) -> tuple[list[Node], list[list[Node]], Node]:
     """``μY. ∨_i νX. (g ∧ CPre(Z)) ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))`` with its iterates."""
-    reach_goal = g & cpre(Z)
+    # Every iterate is kept inside Z: the winning region is a fixpoint of the restricted
+    # operator too (winning strategies never leave it), and the restricted operator is below
+    # the unrestricted one, so the greatest fixpoint is unchanged — while the BDDs stay free
+    # of junk outside Z (unreachable or already-lost states).
+    reach_goal = g & cpre(Z) & Z
     Y = bdd.false
     layers: list[Node] = []
     x_layers: list[list[Node]] = []
     r = 0
     while True:
         stats["y"] += 1
-        base = reach_goal | cpre(Y)
+        base = reach_goal | (cpre(Y) & Z)
         y_new = bdd.false
         xs: list[Node] = []
         for i, a in enumerate(A):
             start = Z
             if r < len(recycled):
                 start = recycled[r][i] & Z
-            X = _nu_x(cpre, base, ~a, start | base, stats)
+            X = _nu_x(cpre, base, ~a & Z, start | base, stats)
             xs.append(X)
             y_new |= X
         y_new &= Z

@@ -8,9 +8,11 @@ conjunction of per-component relations — a component whose alphabet contains t
 by its own relation, the others are framed (``s' = s``); ``tau`` interleaves — and any state in
 which some component is at its ERROR code has no successors (ERROR is a losing sink).
 
-Variable orders (``order``): ``"action_first"`` (action bits on top, then each component's
-bits with current/next interleaved — the default), ``"action_last"``, and ``"blocked"`` (all
-current bits, then all next bits; the textbook bad order, kept for the benchmark).
+Variable orders (``order``): ``"clustered"`` (the default: action bits on top, then each
+body component's bits with current/next interleaved, each fluent monitor's bit placed right
+after the smallest component sharing most actions with it), ``"action_first"`` (the same
+without moving fluents: they come last), ``"action_last"``, and ``"blocked"`` (all current
+bits, then all next bits; the textbook bad order, kept for the benchmark).
 
 Game (§3.3): ``Env(s) = ∃a,s'. T ∧ ¬ctrl(a)``;
 ``CPre(X) = (Env ∧ ∀s'. Tu → X') ∨ (¬Env ∧ ∃s'. Tc ∧ X')`` with ``Tu``/``Tc`` the
@@ -21,7 +23,6 @@ disjunct, so they lose.  The winning region comes from :func:`fixpoint.gr1_winni
 from __future__ import annotations
 
 import time
-from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -31,20 +32,21 @@ from iterplan_compiler.symbolic.bdd import (
     and_exists,
     bits_for,
     declare_interleaved,
+    disjoin,
     new_manager,
 )
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
-from iterplan_compiler.synthesis.explicit import ExplicitGame, solve_ranks
+from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product, solve_ranks
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
 from iterplan_compiler.synthesis.strategy import extract_controller, extract_director
 
-ORDERS = ("action_first", "action_last", "blocked")
+ORDERS = ("action_first", "clustered", "action_last", "blocked")
 
 
 class SymbolicGame:
     """BDD encoding of a :class:`GameSpec` (see the module docstring)."""
 
-    def __init__(self, spec: GameSpec, *, bdd: Any = None, order: str = "action_first") -> None:
+    def __init__(self, spec: GameSpec, *, bdd: Any = None, order: str = "clustered") -> None:
         if order not in ORDERS:
             raise ValueError(f"unknown order {order!r}")
         self.spec = spec
@@ -69,12 +71,14 @@ class SymbolicGame:
             self.cur = [BitVec(n) for n in cur_names]
             self.nxt = [BitVec(n) for n in nxt_names]
         else:
-            if order == "action_first":
+            if order in ("action_first", "clustered"):
                 b.declare(*[f"act_{i}" for i in range(aw)])
-            for k, w in enumerate(widths):
-                c, n = declare_interleaved(b, f"s{k}", w)
-                self.cur.append(c)
-                self.nxt.append(n)
+            vecs: dict[int, tuple[BitVec, BitVec]] = {}
+            for k in self._declaration_order(order):
+                vecs[k] = declare_interleaved(b, f"s{k}", widths[k])
+            for k in range(len(widths)):
+                self.cur.append(vecs[k][0])
+                self.nxt.append(vecs[k][1])
             if order == "action_last":
                 b.declare(*[f"act_{i}" for i in range(aw)])
         self.act = BitVec(tuple(f"act_{i}" for i in range(aw)))
@@ -87,6 +91,27 @@ class SymbolicGame:
         self._act_bdd = {a: self.act.eq(b, i) for i, a in enumerate(self.actions)}
         self._build()
 
+    def _declaration_order(self, order: str) -> list[int]:
+        """Component order in the BDD: given order, or (``clustered``) each fluent monitor
+        placed right after the body component sharing most actions with it, so a fluent's bit
+        sits next to the state bits it is correlated with."""
+        spec = self.spec
+        nbody = spec.num_plant + spec.num_safety
+        ks = list(range(len(spec.components)))
+        if order != "clustered" or nbody == 0:
+            return ks
+        after: dict[int, list[int]] = {k: [] for k in range(nbody)}
+        for f in range(nbody, len(ks)):
+            alpha = spec.components[f].alphabet
+            best = max(range(nbody), key=lambda k: (len(alpha & spec.components[k].alphabet),
+                                                    -len(spec.components[k].alphabet), -k))
+            after[best].append(f)
+        out: list[int] = []
+        for k in range(nbody):
+            out.append(k)
+            out.extend(after[k])
+        return out
+
     # -- construction -------------------------------------------------------------------
 
     def _frame(self, k: int) -> Any:
@@ -95,7 +120,7 @@ class SymbolicGame:
     def _component_relation(self, k: int, c: LTS, labels: set[str]) -> dict[str, Any]:
         """``{label: R(s_k, s_k')}`` for the given labels of component ``k``."""
         b = self.bdd
-        rel: dict[str, Any] = {}
+        terms: dict[str, list[Any]] = {}
         cur, nxt = self.cur[k], self.nxt[k]
         err = self.err_code[k]
         src_cache: dict[int, Any] = {}
@@ -108,8 +133,8 @@ class SymbolicGame:
                 src_cache[s] = cur.eq(b, s)
             if t_code not in dst_cache:
                 dst_cache[t_code] = nxt.eq(b, t_code)
-            rel[a] = rel.get(a, b.false) | (src_cache[s] & dst_cache[t_code])
-        return rel
+            terms.setdefault(a, []).append(src_cache[s] & dst_cache[t_code])
+        return {a: disjoin(b, ts) for a, ts in terms.items()}
 
     def _build(self) -> None:
         b = self.bdd
@@ -128,11 +153,8 @@ class SymbolicGame:
             if self.err_code[k] is not None:
                 err |= self.cur[k].eq(b, self.err_code[k])
             rel = self._component_relation(k, c, set(c.alphabet) | {TAU})
-            own = b.false
-            Tk = b.false
-            for a in c.alphabet:
-                own |= self._act_bdd[a]
-                Tk |= self._act_bdd[a] & rel.get(a, b.false)
+            own = disjoin(b, [self._act_bdd[a] for a in c.alphabet])
+            Tk = disjoin(b, [self._act_bdd[a] & rel[a] for a in sorted(c.alphabet) if a in rel])
             # actions outside the component's alphabet (and tau, handled below) frame it
             Tk |= ~own & self._frame(k)
             T &= Tk
@@ -245,43 +267,28 @@ class SymbolicGame:
 def subgame(g: SymbolicGame, region: Any, *, limit: int | None = None) -> ExplicitGame:
     """The explicit game on the states reachable from the initial state through ``region``.
 
-    Edges leaving ``region`` go to one sink (no successors; the ERROR slot), so the ranks of
-    region states are those of the full game.
+    Edges leaving ``region`` go to states without successors (and ERROR to one sink), so the
+    ranks of region states are those of the full game.  The region's states are enumerated
+    from the BDD once (states only, no edges); the edges come from an explicit exploration of
+    the components that expands region states only — far cheaper than enumerating the
+    transition relation.
     """
     b = g.bdd
     spec = g.spec
-    start = next(iter(b.pick_iter(g.init, care_vars=g.cur_vars)))
-    t0 = g.decode(start, g.cur)
-    index = {t0: 0}
-    tuples: list[tuple[int, ...] | None] = [t0]
-    raw: list[list[tuple[str, tuple[int, ...] | None]]] = []
-    q = deque([t0])
-    sink_needed = False
-    inside: list[bool] = []
-    while q:
-        tup = q.popleft()
-        cube = g.state_cube(tup)
-        ok = (cube & region) != b.false
-        inside.append(ok)
-        succ = g.successors(tup) if ok else []
-        raw.append(succ)
-        for _, nt in succ:
-            if nt is None:
-                sink_needed = True
-            elif nt not in index:
-                index[nt] = len(tuples)
-                tuples.append(nt)
-                q.append(nt)
-                if limit is not None and len(tuples) > limit:
-                    raise MemoryError(f"subgame larger than {limit} states")
-    n = len(tuples)
-    sink = n if sink_needed else None
-    edges: list[list[tuple[str, int]]] = []
-    for succ in raw:
-        edges.append([(a, sink if nt is None else index[nt]) for a, nt in succ])  # type: ignore[misc]
+    members = {g.decode(asg, g.cur) for asg in b.pick_iter(region, care_vars=g.cur_vars)}
+    tuples_, pedges, _ = explore_product(spec.components, max_states=limit,
+                                         expand=members.__contains__)
+    n = len(tuples_)
+    has_error = any(t == ERROR for out in pedges for _, t in out)
+    sink = n if has_error else None
+    edges: list[list[tuple[str, int]]] = [
+        [(a, sink if t == ERROR else t) for a, t in out] for out in pedges]  # type: ignore[misc]
+    inside = [t in members for t in tuples_]
+    tuples: list[tuple[int, ...] | None] = list(tuples_)
     if sink is not None:
         tuples.append(None)
         edges.append([])
+        inside.append(False)
     total = len(edges)
     ctrl = spec.controllable
     env = [any(a not in ctrl for a, _ in edges[s]) for s in range(total)]
@@ -319,7 +326,7 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 
 
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
-                   explain: bool, name: str, order: str = "action_first"
+                   explain: bool, name: str, order: str = "clustered"
                    ) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why)."""
     t = time.perf_counter()
@@ -392,4 +399,7 @@ def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool) -> str
     for s, tup in enumerate(game.tuples):
         if tup is not None and (g.state_cube(tup) & W) != g.bdd.false:
             win.add(s)
-    return explain_losing(g.spec, game, frozenset(win))
+    try:
+        return explain_losing(g.spec, game, frozenset(win))
+    except Exception as exc:  # noqa: BLE001 - an explanation bug must not hide the verdict
+        return head + f"\n(no counter-strategy trace: {exc})"

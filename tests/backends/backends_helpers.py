@@ -93,7 +93,8 @@ class FakeResult:
         self.controller = controller
         self.composition = controller
         self.explanation = explanation
-        self.stats = {"states": controller.num_states if controller else 0}
+        self.stats = {"states": controller.num_states if controller else 0,
+                      "warnings": ["fluent F: actions ['zz'] are not plant actions"]}
 
 
 class FakeProblem:

@@ -29,8 +29,9 @@ def _fly(compiled, name, stop, **kw):
     return res, grid
 
 
-def test_fire_patrol_one_pass(compiled):
-    res, grid = _fly(compiled, "fire_patrol", lambda e: e.label == "n.next")
+@pytest.mark.parametrize("sorter", ["distance", "last", "random"])
+def test_fire_patrol_one_pass(compiled, sorter):
+    res, grid = _fly(compiled, "fire_patrol", lambda e: e.label == "n.next", sorter=sorter)
     check_fire_patrol(res.log, grid)
 
 
@@ -47,8 +48,9 @@ def test_fire_patrol_second_pass_after_reset(compiled):
     assert len(arrivals) == 2 * len(patrol) and set(arrivals) == patrol
 
 
-def test_cover_visits_exactly_the_region(compiled):
-    res, grid = _fly(compiled, "cover", lambda e: e.label == "n.next")
+@pytest.mark.parametrize("sorter", ["distance", "random"])
+def test_cover_visits_exactly_the_region(compiled, sorter):
+    res, grid = _fly(compiled, "cover", lambda e: e.label == "n.next", sorter=sorter, seed=3)
     check_cover(res.log, grid)
 
 

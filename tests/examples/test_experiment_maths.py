@@ -156,3 +156,17 @@ def harness_plot(exp, rows, tmp_path):
     from iterplan_compiler.experiments import plots
 
     return plots.plot(exp, harness.aggregate(rows), tmp_path / f"{exp}.png")
+
+
+def test_trajectory_plot(tmp_path):
+    from types import SimpleNamespace
+
+    from iterplan_compiler.experiments import missions, trajectories
+    from iterplan_compiler.experiments.missions import LogEvent
+
+    case = Case("fig3b", 144, 3, "last", 0)
+    grid = missions.build_grid(case)
+    res = SimpleNamespace(log=[LogEvent(5.0, "visited.p.0")],
+                          track=[(float(t), 10.0 * t, 5.0 * t) for t in range(20)])
+    png = trajectories.plot_tracks([(144, res, grid)], tmp_path / "a.png")
+    assert png.read_bytes()[:4] == b"\x89PNG"

@@ -124,8 +124,12 @@ def dfa_accepts_lasso(lts: LTS, lasso: Lasso) -> bool:
     return cur is not None and cur != ERROR
 
 
-def lasso_runs(lts: LTS, max_len: int):
-    """Every lasso run ``(prefix, cycle)`` of ``lts`` with ``len(prefix)+len(cycle) <= max_len``."""
+def lasso_runs(lts: LTS, max_len: int, *, fair: bool = False):
+    """Every lasso run ``(prefix, cycle)`` of ``lts`` with ``len(prefix)+len(cycle) <= max_len``.
+
+    With ``fair``, only strongly fair ones: the cycle takes every transition (ERROR moves
+    included, which no cycle can take) of every state it visits.
+    """
     out = lts.out_edges()
     stack = [((lts.initial,), ())]
     while stack:
@@ -136,9 +140,36 @@ def lasso_runs(lts: LTS, max_len: int):
             if t == ERROR:
                 continue
             for j, s in enumerate(states):
-                if s == t:
-                    yield labels[:j], labels[j:] + (a,)
+                if s != t:
+                    continue
+                cyc_states = states[j:] + (t,)
+                cyc_labels = labels[j:] + (a,)
+                if fair:
+                    taken = set(zip(cyc_states, cyc_labels, cyc_states[1:], strict=False))
+                    if any((u, b, v) not in taken for u in cyc_states for b, v in out[u]):
+                        continue
+                yield labels[:j], cyc_labels
             stack.append((states + (t,), labels + (a,)))
+
+
+def is_fair_cycle(lts: LTS, prefix, cycle) -> bool:
+    """``prefix (cycle)^w`` has a strongly fair run in ``lts`` (checked on the state sets the
+    cycle can follow; exact for deterministic machines)."""
+    out = lts.out_edges()
+    for s in states_after(lts, prefix):
+        cur, taken, seq = s, set(), [s]
+        ok = True
+        for a in cycle:
+            nxt = [t for b, t in out[cur] if b == a and t != ERROR]
+            if not nxt:
+                ok = False
+                break
+            taken.add((cur, a, nxt[0]))
+            cur = nxt[0]
+            seq.append(cur)
+        if ok and cur == s and all((u, b, v) in taken for u in seq for b, v in out[u]):
+            return True
+    return False
 
 
 def states_after(lts: LTS, word, start=None) -> set[int]:

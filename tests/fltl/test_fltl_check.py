@@ -1,7 +1,18 @@
 """FLTL model checking: hand-written systems and agreement with the direct evaluator."""
 
-from fltl_helpers import FLUENTS, act, fl, formulas, is_run, lasso_runs, lassos, total_lts
-from hypothesis import HealthCheck, given, settings
+from fltl_helpers import (
+    ACTIONS,
+    FLUENTS,
+    act,
+    fl,
+    formulas,
+    is_fair_cycle,
+    is_run,
+    lasso_runs,
+    lassos,
+    total_lts,
+)
+from hypothesis import HealthCheck, example, given, settings
 
 from iterplan_compiler.fltl.check import Counterexample, check_assert, model_check
 from iterplan_compiler.fltl.semantics import Lasso, evaluate, is_good_prefix
@@ -27,20 +38,47 @@ SETTINGS = settings(max_examples=80, deadline=None,
 CHOICE = make_lts("P", 3, [(0, "a", 1), (1, "b", 0), (0, "a", 2), (2, "c", 0)])
 
 
-def holds(lts, f, fluents=None):
-    return model_check(lts, f, fluents or {}).holds
+def holds(lts, f, fluents=None, *, fair=True):
+    return model_check(lts, f, fluents or {}, fair=fair).holds
 
 
 def test_liveness_with_cycles():
     assert holds(CHOICE, Always(Eventually(act("a"))))
-    res = model_check(CHOICE, Always(Eventually(act("b"))), {})
-    assert not res.holds
-    cex = res.counterexample
-    assert cex.cycle and "b" not in cex.cycle  # the a-c loop starves b
-    assert is_run(CHOICE, cex.prefix, cex.cycle)
-    assert not evaluate(Always(Eventually(act("b"))), Lasso(cex.prefix, cex.cycle), {})
     assert not holds(CHOICE, Eventually(Always(act("a"))))
     assert holds(CHOICE, Always(Eventually(Or(act("b"), act("c")))))
+    # Without fairness the a-c loop starves b ...
+    res = model_check(CHOICE, Always(Eventually(act("b"))), {}, fair=False)
+    assert not res.holds
+    cex = res.counterexample
+    assert cex.cycle and "b" not in cex.cycle
+    assert is_run(CHOICE, cex.prefix, cex.cycle)
+    assert not evaluate(Always(Eventually(act("b"))), Lasso(cex.prefix, cex.cycle), {})
+    # ... but under fair choice (LTSA's default) both a-moves are taken infinitely often.
+    assert holds(CHOICE, Always(Eventually(act("b"))))
+
+
+def test_fair_violation_needs_a_terminal_set():
+    # P = (a -> P | go -> Q), Q = (c -> Q): every fair run leaves the a-loop for good.
+    sys_ = make_lts("P", 2, [(0, "a", 0), (0, "go", 1), (1, "c", 1)])
+    res = model_check(sys_, Always(Eventually(act("a"))), {})
+    assert not res.holds
+    assert res.counterexample == Counterexample(("go",), ("c",), ("c",))
+    assert "Actions in terminal set:\n    {c}" in res.counterexample.render()
+    assert holds(sys_, Eventually(Always(act("c"))))
+    assert not holds(sys_, Eventually(Always(act("c"))), fair=False)
+
+
+def test_mtsa_gr1test43_escape_from_an_uncontrolled_loop():
+    # Blocking/ControllableFSPs/GR1Test43's controlled system: the d-e loop can be repeated
+    # forever only unfairly (c and f stay enabled); MTSA expects Check = []<>S1 to hold.
+    sys_ = make_lts("Sys", 6, [(0, "g", 1), (1, "a", 2), (2, "b", 3), (3, "c", 4), (3, "d", 5),
+                               (4, "g", 1), (5, "e", 3), (5, "f", 4)])
+    every = {"a", "b", "c", "d", "e", "f", "g"}
+    fluents = {"FS1": fl("FS1", {"c", "f"}, every - {"c", "f"})}
+    check = Always(Eventually(FluentProp("FS1")))
+    assert holds(sys_, check, fluents)
+    res = model_check(sys_, check, fluents, fair=False)
+    assert not res.holds and set(res.counterexample.cycle) == {"d", "e"}
 
 
 def test_safety_and_next():
@@ -65,11 +103,19 @@ def test_fluent_liveness_mutex():
     assert holds(sys_, Always(Eventually(c1)), fluents)
     assert holds(sys_, Always(Implies(c1, Eventually(c2))), fluents)
     assert not holds(sys_, Eventually(Always(c1)), fluents)
-    # A system that may stay in user 1's critical section forever (a work loop).
+    # A system that may stay in user 1's critical section forever (a work loop): only an
+    # unfair run does so.
     loop = make_lts("L", 4, [(0, "enter1", 1), (1, "work", 1), (1, "exit1", 2),
                              (2, "enter2", 3), (3, "exit2", 0)])
-    res = model_check(loop, Always(Eventually(c2)), fluents)
+    assert holds(loop, Always(Eventually(c2)), fluents)
+    res = model_check(loop, Always(Eventually(c2)), fluents, fair=False)
     assert not res.holds and res.counterexample.cycle == ("work",)
+    # A lock that user 1 may keep for good once it chose to: a fair violation.
+    keep = make_lts("K", 5, [(0, "enter1", 1), (1, "exit1", 2), (1, "keep", 4), (4, "work", 4),
+                             (2, "enter2", 3), (3, "exit2", 0)])
+    res = model_check(keep, Always(Eventually(c2)), fluents)
+    assert not res.holds and res.counterexample.cycle == ("work",)
+    assert res.counterexample.terminal_actions == ("work",)
 
 
 def test_deadlock_is_not_a_liveness_counterexample_but_safety_is_checked():
@@ -91,6 +137,7 @@ def test_error_moves_end_the_run():
     # The run "b" stops in ERROR; it is a finite run, and a bad prefix of [] a.
     res = model_check(err, Always(act("a")), {})
     assert not res.holds and res.counterexample == Counterexample(("b",), ())
+    assert res.error_reachable and not model_check(CHOICE, act("a"), {}).error_reachable
     # ... but not a liveness counterexample.
     assert holds(err, Always(Eventually(act("a"))))
 
@@ -138,18 +185,41 @@ def test_single_run_system_agrees_with_evaluator(formula, lasso):
 
 @SETTINGS
 @given(total_lts(), formulas)
+@example(make_lts("R", 1, [(0, "a", 0), (0, "b", 0)], ACTIONS), Always(Eventually(act("a"))))
 def test_random_systems_agree_with_brute_force(lts, formula):
-    res = model_check(lts, formula, FLUENTS)
-    brute = [r for r in lasso_runs(lts, 6)
-             if not evaluate(formula, Lasso(r[0], r[1]), FLUENTS)]
-    if res.holds:
-        assert brute == []
-    else:
+    for fair in (False, True):
+        res = model_check(lts, formula, FLUENTS, fair=fair)
+        brute = [r for r in lasso_runs(lts, 6, fair=fair)
+                 if not evaluate(formula, Lasso(r[0], r[1]), FLUENTS)]
+        if res.holds:
+            assert brute == []
+            continue
         cex = res.counterexample
         assert cex.cycle and is_run(lts, cex.prefix, cex.cycle)
         assert not evaluate(formula, Lasso(cex.prefix, cex.cycle), FLUENTS)
+        if fair and res.stats.get("fair_cycle", True):
+            assert set(cex.terminal_actions) >= set(cex.cycle)
         if len(cex.prefix) + len(cex.cycle) <= 3:
             assert brute  # a short counterexample is within the brute-force bound
+
+
+@SETTINGS
+@given(total_lts(), formulas)
+def test_fair_counterexamples_are_fair_on_deterministic_systems(lts, formula):
+    seen = set()
+    first = []
+    for t in lts.transitions:  # keep one move per (state, label): a deterministic system
+        if (t[0], t[1]) not in seen:
+            seen.add((t[0], t[1]))
+            first.append(t)
+    det = make_lts("D", lts.num_states, first, lts.alphabet)
+    res = model_check(det, formula, FLUENTS)
+    if not res.holds and res.counterexample.cycle:
+        cex = res.counterexample
+        assert is_fair_cycle(det, cex.prefix, cex.cycle)
+    # Fairness only removes counterexamples.
+    if model_check(det, formula, FLUENTS, fair=False).holds:
+        assert res.holds
 
 
 @SETTINGS

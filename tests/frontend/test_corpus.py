@@ -17,13 +17,9 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.frontend import load
-from iterplan_compiler.frontend.elaborate import (
-    SYNTHESIS_KEYWORDS,
-    UNSUPPORTED_AT_BUILD,
-    _cb_refs,
-)
+from iterplan_compiler.frontend.elaborate import SYNTHESIS_KEYWORDS, _cb_refs
 
-_SKIP_KW = SYNTHESIS_KEYWORDS | UNSUPPORTED_AT_BUILD
+_SKIP_KW = SYNTHESIS_KEYWORDS
 
 
 def _needs_synthesis(model, name: str, seen: frozenset[str] = frozenset()) -> bool:
@@ -100,8 +96,8 @@ def test_compiles_rows(row):
 
 @pytest.mark.parametrize("row", _selected("alphabet check"), ids=lambda r: r["file"])
 def test_alphabet_rows(row):
-    if row["keywords"] != "plain composite":
-        pytest.skip("needs synthesis / controlled_det")
+    if row["keywords"] not in ("plain composite", "controlled_det"):
+        pytest.skip("needs synthesis of a nondeterministic plant (synthesis suite)")
     model, diags = load(str(ROOT / row["file"]))
     errs = _errors(diags)
     if any(d.code == "E0150" for d in errs):

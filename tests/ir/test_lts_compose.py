@@ -6,7 +6,7 @@ import pytest
 from helpers_lts import E, cycle, lts, moves
 
 from iterplan_compiler.ir.compose import StateExplosion, compose, explore_product
-from iterplan_compiler.ir.lts import TAU
+from iterplan_compiler.ir.lts import TAU, make_lts
 
 
 def test_shared_labels_synchronise_private_interleave():
@@ -68,6 +68,33 @@ def test_end_only_when_all_components_end():
     assert moves(r, e) == []
     q_stop = lts("Q", 2, [(0, "b", 1)])  # ends in STOP, not END
     assert compose([p, q_stop], "R").end_states == frozenset()
+
+
+def test_end_rule_for_non_terminating_components():
+    # P = (a -> END); Q = (a -> Q) never terminates but its alphabet is inside P's: END.
+    p = lts("P", 2, [(0, "a", 1)], end={1})
+    q = lts("Q", 1, [(0, "a", 0)])
+    r = compose([p, q], "R")
+    assert r.num_states == 2 and r.end_states == {1}
+    # a non-terminating component with a label of its own prevents END (it is a deadlock)
+    q2 = lts("Q", 2, [(0, "a", 0), (0, "b", 1)])
+    assert compose([p, q2], "R").end_states == frozenset()
+    # ... so END is not associative: nested, (P || Q2) has no END and then no terminating part
+    s = lts("S", 2, [(0, "b", 1)], end={1})
+    assert compose([p, q2, s], "F").end_states
+    assert not compose([compose([p, q2], "PQ"), s], "N").end_states
+
+
+def test_end_tuples_are_merged():
+    # (a -> END | b -> END) || (c -> END | d -> END): four END tuples, one END state
+    p = lts("P", 3, [(0, "a", 1), (0, "b", 2)], end={1, 2})
+    q = lts("Q", 3, [(0, "c", 1), (0, "d", 2)], end={1, 2})
+    r = compose([p, q], "R")
+    assert len(r.end_states) == 1
+    (e,) = r.end_states
+    assert r.num_states == 6  # initial, a, b, c, d, END
+    assert [t for _, _, t in r.transitions].count(e) == 8  # 4 intermediate states x 2 moves
+    assert r == make_lts("R", r.num_states, r.transitions, r.alphabet, 0, r.end_states)
 
 
 def test_numbering_is_canonical_bfs():

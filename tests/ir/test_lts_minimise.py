@@ -113,3 +113,19 @@ def test_property_example_bisimilar_to_expected():
     expected = lts("PL", 2, [(0, "a", 1), (0, "b", E), (1, "b", 0), (1, "a", E)])
     obtained = property_complete(deterministic(cycle("LOWER", "a", "b")))
     assert bisimilar(obtained, expected)
+
+
+def test_trace_difference():
+    from iterplan_compiler.ir.minimise import trace_difference
+
+    p = cycle("P", "a", "b")
+    q = lts("Q", 3, [(0, "a", 1), (1, "b", 2), (2, "a", 1), (1, "c", E)])
+    assert trace_difference(p, q) == (("a",), frozenset(), frozenset({"c->ERROR"}))
+    assert trace_difference(p, cycle("P2", "a", "b", "a", "b")) is None
+    # trace-equivalent but not bisimilar: no trace difference
+    r = lts("R", 5, [(0, "a", 1), (0, "a", 2), (1, "b", 3), (2, "c", 4)])
+    s = lts("S", 4, [(0, "a", 1), (1, "b", 2), (1, "c", 3)])
+    assert trace_difference(r, s) is None and not bisimilar(r, s)
+    end = lts("E", 2, [(0, "a", 1)], end={1})
+    stop = lts("S", 2, [(0, "a", 1)])
+    assert trace_difference(end, stop) == (("a",), frozenset({"END"}), frozenset())

@@ -76,9 +76,14 @@ def test_composition_commutes(p, q):
 @SETTINGS
 @given(small_lts(max_states=3), small_lts(max_states=3), small_lts(max_states=3))
 def test_composition_associates(p, q, r):
-    flat = compose([p, q, r], "X")
-    assert bisimilar(compose([compose([p, q], "PQ"), r], "X"), flat)
-    assert bisimilar(compose([p, compose([q, r], "QR")], "X"), flat)
+    # END is not associative in MTSA (a nested composite with a non-terminating part has no
+    # END at all, see test_end_rule_for_non_terminating_components), so compare without END.
+    def no_end(m: LTS) -> LTS:
+        return make_lts(m.name, m.num_states, m.transitions, m.alphabet, m.initial)
+
+    flat = no_end(compose([p, q, r], "X"))
+    assert bisimilar(no_end(compose([compose([p, q], "PQ"), r], "X")), flat)
+    assert bisimilar(no_end(compose([p, compose([q, r], "QR")], "X")), flat)
 
 
 @SETTINGS
@@ -122,6 +127,29 @@ def test_weak_minimise_is_weakly_bisimilar(p):
 @SETTINGS
 @given(small_lts(), small_lts())
 def test_strong_bisimilarity_implies_weak_and_traces(p, q):
+    from iterplan_compiler.ir.minimise import trace_difference
+
+    assert trace_difference(p, p) is None
     if bisimilar(p, q):
         assert bisimilar(p, q, weak=True)
         assert traces(p, 4) == traces(q, 4)
+        assert trace_difference(p, q) is None
+    elif p.alphabet == q.alphabet and trace_difference(p, q) is not None:
+        # a trace difference is a real one: the determinised machines differ
+        assert not bisimilar(determinise(p), determinise(q))
+
+
+@SETTINGS
+@given(small_lts(), small_lts(), st.sets(st.sampled_from(["a", "b", "c"])))
+def test_legality_properties(p, q, controllable):
+    from iterplan_compiler.ir.legality import is_legal
+
+    d = determinise(p)
+    # a deterministic machine never blocks itself
+    assert is_legal(d, d, controllable).legal
+    # if everything is controllable the controller may refuse anything
+    assert is_legal(q, p, q.alphabet | p.alphabet).legal
+    res = is_legal(q, p, controllable)
+    if not res.legal:
+        w = res.witness
+        assert w.action in q.alphabet and w.action not in controllable

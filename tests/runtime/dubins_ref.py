@@ -57,7 +57,7 @@ def integrate(q0, word, tpq, r, steps=400):
     """Fly the word from q0 and return the end pose (for checking the formulas)."""
     x, y, h = q0
     t, p, q = tpq
-    for seg, amount in zip(word, (t, p * r, q)):
+    for seg, amount in zip(word, (t, p * r, q), strict=False):
         for _ in range(steps):
             if seg == "S":
                 ds = amount / steps

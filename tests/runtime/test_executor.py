@@ -15,7 +15,8 @@ from tests.runtime.fire_patrol import TABLE
 
 MAP = {"name": "fire-patrol-test", "cols": 10, "rows": 8, "home": {"cell": "A1"},
        "arrival_heading": 0,
-       "sensors": {"inP": {"random": 0.2, "seed": 4}, "fire": ["C3", "E5", "H6", "B7", "J1"]}}
+       "sensors": {"inP": ["B2", "C3", "D3", "E5", "F2", "G7", "H6", "I4", "J8", "A5", "C7", "E1"],
+                   "fire": ["C3", "E5", "H6", "B7", "J1"]}}
 
 
 def fly(sorter="distance", ideal=True, data=MAP, table=TABLE, **kw):
@@ -73,32 +74,49 @@ def test_compute_time_is_charged_to_the_simulated_clock():
     assert q.summary["compute_s"] == 0.0
 
 
-def refusing_table():
-    # After y.next the controller expects only yes/no answers it never gets: is.next.inP is
-    # answered, but 'arrived' is refused because it goes straight to remove.next.
-    t = [(0, "has.next", 1), (1, "y.next", 2), (1, "n.next", 0), (2, "go.next", 3),
-         (3, "remove.next", 0)]
-    return ControllerTable.from_transitions("Bad", 4, t,
-                                            {"has.next", "go.next", "remove.next"},
-                                            {"y.next", "n.next", "arrived"})
-
-
 def test_refused_event_ends_mission_safely():
-    grid, r = fly(table=refusing_table())
-    # The controller removes and re-goes before arriving; eventually 'arrived' comes in a state
-    # that does not accept it.
-    assert not r.ok and "unexpected event" in r.reason and "arrived" in r.reason
+    # This controller only accepts 'no' from the patrol sensor; the first patrol cell offered
+    # makes the sensor answer yes.next.inP, which it refuses.
+    t = ControllerTable.from_transitions(
+        "Bad", 5, [(0, "has.next", 1), (1, "y.next", 2), (1, "n.next", 0),
+                   (2, "is.next.inP", 3), (3, "no.next.inP", 4), (4, "remove.next", 0)],
+        {"has.next", "is.next.inP", "remove.next"},
+        {"y.next", "n.next", "yes.next.inP", "no.next.inP"})
+    _, r = fly(table=t)
+    assert not r.ok and "unexpected event" in r.reason and "yes.next.inP" in r.reason
     assert any(e.kind == "x" and e.label.startswith("safe end") for e in r.log)
 
 
-def test_waiting_for_nothing_and_deadlock_are_reported():
+def test_bad_answers_waiting_for_nothing_and_deadlock_are_reported():
     t = ControllerTable.from_transitions("Wait", 2, [(0, "has.next", 1), (1, "mystery", 0)],
                                          {"has.next"}, {"mystery", "y.next", "n.next"})
     _, r = fly(table=t)
-    assert not r.ok and "binding answered" in r.reason
+    assert not r.ok and "refuses 'y.next'" in r.reason
+    t1 = ControllerTable.from_transitions("W", 2, [(0, "take.photo", 1), (1, "mystery", 0)],
+                                          {"take.photo"}, {"mystery"})
+    _, r1 = fly(table=t1)
+    assert not r1.ok and "waits for mystery" in r1.reason
     t2 = ControllerTable.from_transitions("Dead", 2, [(0, "take.photo", 1)], {"take.photo"}, set())
     _, r2 = fly(table=t2)
     assert not r2.ok and "deadlocked" in r2.reason
+    t3 = ControllerTable.from_transitions("Odd", 1, [(0, "has.next", 0)], {"has.next"},
+                                          {"y.next", "n.next"})
+    b = Bindings().bind("has.next", lambda ctx, label: "no.such.answer")
+    grid = load_map(data=MAP)
+    r3 = Executor(t3, grid, SimVehicle(home=grid.home), bindings=b,
+                  config=RunConfig(ideal_compute=True)).run()
+    assert not r3.ok and "binding answered 'no.such.answer'" in r3.reason
+
+
+@pytest.mark.parametrize("ideal", [True, False])
+def test_livelock_is_detected(ideal):
+    # Never removes: asks about the same location forever.
+    t = ControllerTable.from_transitions(
+        "Loop", 4, [(0, "has.next", 1), (1, "y.next", 2), (1, "n.next", 0),
+                    (2, "is.next.inP", 3), (3, "no.next.inP", 0), (3, "yes.next.inP", 0)],
+        {"has.next", "is.next.inP"}, {"y.next", "n.next", "yes.next.inP", "no.next.inP"})
+    _, r = fly(table=t, ideal=ideal, livelock_limit=2000)
+    assert not r.ok and "livelock" in r.reason
 
 
 def test_missing_sensor_is_a_clear_error():
@@ -166,3 +184,60 @@ def test_load_controller(tmp_path):
     with pytest.raises(ValueError, match="cannot import"):
         load_controller(broken)
     assert math.isfinite(1.0)
+
+
+def test_takeoff_land_bindings_and_on_event_stop():
+    t = ControllerTable.from_transitions(
+        "TL", 8, [(0, "takeoff", 1), (1, "takeoff.ended", 2), (2, "has.next", 3),
+                  (3, "y.next", 4), (3, "n.next", 5), (4, "remove.next", 2), (5, "land", 6),
+                  (6, "landed", 7), (7, "restart", 0)],
+        {"takeoff", "has.next", "remove.next", "land", "restart"},
+        {"takeoff.ended", "n.next", "y.next", "landed"})
+    grid = load_map(data=MAP)
+    v = SimVehicle(SimParams(), home=grid.home)
+    seen = []
+
+    def on_event(kind, label):
+        seen.append((kind, label))
+        return label == "landed"
+
+    cfg = RunConfig(ideal_compute=True, passes=0, on_event=on_event)
+    r = Executor(t, grid, v, config=cfg).run()
+    assert r.ok and "on_event" in r.reason
+    assert v.mode == "LANDED" and v.alt == 0.0
+    labels = [lab for _, lab in seen]
+    assert labels[:2] == ["takeoff", "takeoff.ended"] and labels[-2:] == ["land", "landed"]
+    assert labels.count("remove.next") == len(grid.cells)
+
+
+def test_compute_clock_is_used_and_think_time_becomes_flight_time():
+    # A clock running 2000x fast: a very slow "onboard computer".  Its think time is charged to
+    # the simulated clock while the aircraft flies on.
+    # A pass over a map with nothing to patrol never waits for the aircraft: with ideal compute
+    # it takes no mission time at all, with the slow computer exactly its think time.
+    data = {**MAP, "sensors": {"inP": [], "fire": []}}
+    import time
+
+    _, slow = fly(ideal=False, compute_clock=lambda: time.perf_counter() * 2000.0, data=data)
+    _, ideal = fly(ideal=True, data=data)
+    assert slow.ok and ideal.ok and slow.summary["arrivals"] == 0
+    assert ideal.summary["duration_s"] == 0.0
+    assert slow.summary["compute_s"] > 0.5
+    assert slow.summary["duration_s"] == pytest.approx(slow.summary["compute_s"], abs=0.01)
+    assert slow.summary["distance_m"] > 0.9 * 18.2 * slow.summary["compute_s"]
+
+
+@pytest.mark.parametrize("mode", ["course", "carrot"])
+def test_fire_patrol_in_strong_gusty_wind(mode):
+    # 6.7 m/s wind (37 % of airspeed) plus gusts: with the wind-aware planning radius every
+    # patrol cell is still visited, inside the cell, without misses piling up.
+    grid = load_map(data=MAP)
+    v = SimVehicle(SimParams(wind_east=6.0, wind_north=-3.0, gust_std=0.5, seed=2),
+                   home=grid.home)
+    cfg = RunConfig(ideal_compute=True, planner_mode=mode, wind=7.7)
+    r = Executor(TABLE, grid, v, config=cfg).run()
+    assert r.ok, r.reason
+    assert sorted(c for _, c, _, _ in r.arrivals) == sorted(grid.sensors["inP"].tolist())
+    for _, c, x, y in r.arrivals:
+        assert grid.cell_at(x, y) == c
+    assert r.summary["misses"] <= 2

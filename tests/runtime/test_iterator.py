@@ -68,7 +68,7 @@ def test_model_based(prio, ops, block):
     Sorter's best of R; resort keeps n and D; reset restores D = ∅."""
     n = len(prio)
     it, ids = make(n, prio, block)
-    key = dict(zip(ids.tolist(), prio))
+    key = dict(zip(ids.tolist(), prio, strict=False))
     x = 0
 
     def best(cands):

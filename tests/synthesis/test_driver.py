@@ -98,5 +98,65 @@ def test_variable_orders_agree():
     fa, fb = fl("A", {"a"}, {"b"}), fl("B", {"b"}, {"a"})
     p = problem(plant, controllable={"a", "b"}, fluents=[fa, fb], guarantees=(F("A"), F("B")))
     sizes = {synthesize(p, order=o).stats["controller_states"]
-             for o in ("action_first", "action_last", "blocked")}
+             for o in ("clustered", "action_first", "action_last", "blocked")}
     assert len(sizes) == 1
+
+
+def test_heuristic_preconditions():
+    plant = make_lts("P", 1, [(0, "a", 0)])
+    a = fl("A", {"a"}, {"zzz"})  # 'zzz' is not a plant action
+    ok = problem(plant, controllable={"a"}, fluents=[fl("A", {"a"}, set())],
+                 guarantees=(F("A"),), keywords=("heuristic",))
+    assert synthesize(ok).realizable
+    bad = problem(plant, controllable={"a"}, fluents=[a], guarantees=(F("A"),),
+                  keywords=("heuristic",))
+    r = synthesize(bad)
+    assert not r.realizable and "not permited" in r.explanation
+    # the same problem under 'controller' keeps MTSA's free-move semantics (and a warning)
+    r2 = synthesize(problem(plant, controllable={"a"}, fluents=[a], guarantees=(F("A"),)))
+    assert r2.stats["warnings"]
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_explanation_respects_assumptions(solver):
+    # env loops u1/u2 (both assumption states visited) and never lets the controller act
+    plant = make_lts("P", 3, [(0, "u1", 1), (1, "u2", 0), (1, "c", 2), (2, "u1", 2)])
+    a1, a2 = fl("A1", {"u1"}, {"u2"}), fl("A2", {"u2"}, {"u1"})
+    g = fl("G", {"c"}, {"u1", "u2"})
+    p = problem(plant, controllable={"c"}, fluents=[a1, a2, g], guarantees=(F("G"),),
+                assumptions=(F("A1"), F("A2")))
+    r = synthesize(p, solver=solver)
+    assert not r.realizable
+    assert "assumption #1 holds here" in r.explanation
+    assert "assumption #2 holds here" in r.explanation
+    assert "guarantee #1" in r.explanation
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_check_compatibility(solver):
+    from iterplan_compiler.synthesis.driver import check_compatibility
+
+    # the environment alone decides whether 'u' happens again: compatible
+    plant = make_lts("P", 2, [(0, "u", 1), (1, "c", 0), (1, "d", 1)])
+    a = fl("U", {"u"}, {"c", "d"})
+    p = problem(plant, controllable={"c", "d"}, fluents=[a], assumptions=(F("U"),),
+                guarantees=(F("U"),))
+    ok, msg = check_compatibility(p, solver=solver)
+    # the controller can loop on d forever and so violate GF U: NOT compatible
+    assert not ok and "NOT" in msg
+    plant2 = make_lts("P", 2, [(0, "u", 1), (1, "c", 0)])
+    a2 = fl("U", {"u"}, {"c"})  # (a fluent action outside the plant would be a free move)
+    ok2, msg2 = check_compatibility(problem(plant2, controllable={"c"}, fluents=[a2],
+                                            assumptions=(F("U"),), guarantees=(F("U"),)),
+                                    solver=solver)
+    assert ok2 and "[FSE2010]" in msg2
+
+
+def test_plant_product_embeds_fluents():
+    from iterplan_compiler.synthesis.driver import plant_product
+
+    plant = make_lts("P", 2, [(0, "u", 1), (1, "c", 0)])
+    p = problem(plant, controllable={"c"}, fluents=[fl("U", {"u"}, {"c"})],
+                guarantees=(F("U"),))
+    prod = plant_product(p)
+    assert prod.num_states == 2 and prod.num_transitions == 2
