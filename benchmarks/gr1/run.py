@@ -69,7 +69,7 @@ ANCHORS: dict[tuple[str, int], dict[str, float]] = {
 ANCHOR_FAMILY_NAMES = {"amba_fm15": "synt15", "amba_jcss12": "jcss12"}
 
 FIELDS = ["family", "n", "expected", "realizable", "status", "wall_s", "build_s", "winning_s",
-          "strategy_s", "peak_rss_mb", "peak_live_nodes", "reordering_s", "winning_nodes",
+          "strategy_s", "total_cpu_s", "winning_cpu_s", "strategy_cpu_s", "peak_rss_mb", "peak_live_nodes", "reordering_s", "winning_nodes",
           "strategy_nodes", "variables"]
 
 
@@ -100,6 +100,9 @@ def run_one(family: str, n: int, workdir: Path, limit: float, synthesis: bool,
         build_s=round(data["build_s"], 3),
         winning_s=round(data["winning_s"], 3),
         strategy_s=round(data["strategy_s"], 3),
+        total_cpu_s=round(data["total_cpu_s"], 3),
+        winning_cpu_s=round(data["winning_cpu_s"], 3),
+        strategy_cpu_s=round(data["strategy_cpu_s"], 3),
         peak_rss_mb=round(data["peak_rss_mb"], 1),
         peak_live_nodes=data.get("peak_live_nodes"),
         reordering_s=data.get("reordering_s"),
@@ -144,13 +147,14 @@ def summary(rows: list[dict], limit: float) -> str:
                      f"{best['wall_s'] if best else '-'} | "
                      f"{'all correct' if not wrong else f'{len(wrong)} WRONG'} |")
     lines += ["", "## At the anchor points (realizability wall seconds)", "",
-              "| instance | ours: wall / winning set s | omega | slugs | gr1c |",
+              "| instance | ours: wall / winning set / winning-set CPU s | omega | slugs | gr1c |",
               "|---|---|---|---|---|"]
     for (fam, n), anc in ANCHORS.items():
         r = next((r for r in rows if r["family"] == fam and r["n"] == n), None)
         if r is None:
             continue
-        ours = (f"{r['wall_s']} / {r.get('winning_s', '-')}" if r["status"] == "ok"
+        ours = (f"{r['wall_s']} / {r.get('winning_s', '-')} / {r.get('winning_cpu_s', '-')}"
+                if r["status"] == "ok"
                 else r["status"])
         name = f"{ANCHOR_FAMILY_NAMES.get(fam, fam)} n={n}"
         lines.append(f"| {name} | {ours} | {anc.get('omega', '')} | {anc.get('slugs', '')} | "
@@ -182,7 +186,8 @@ def main(argv: list[str] | None = None) -> int:
                 row = run_one(fam, n, Path(tmp), args.limit, args.synthesis, extra)
                 rows.append(row)
                 print(f"{fam:18s} n={n:<4d} {row['status']:8s} wall {row['wall_s']:8.2f} s"
-                      f"  win {row.get('winning_s', '-')}  strat {row.get('strategy_s', '-')}"
+                      f"  win {row.get('winning_s', '-')} (cpu {row.get('winning_cpu_s', '-')})"
+                      f"  strat {row.get('strategy_s', '-')}"
                       f"  rss {row.get('peak_rss_mb', '-')} MB", flush=True)
                 if row["status"] != "ok" or row["wall_s"] > args.limit:
                     break

@@ -1,7 +1,9 @@
-"""``iterc experiment``: reproduce the paper's Fig. 3 (b)-(d) and the synthesis-time table.
+"""``iterc experiment``: reproduce the paper's Fig. 3 (a)-(d) and the synthesis-time table.
 
     iterc experiment fig3b --quick            # small sizes (CI), 2 seeds
     iterc experiment fig3b --jobs 4           # full sizes (up to 700,000 locations, 30 seeds)
+    iterc experiment fig3b --sizes 1000,700000 --seeds 3 --sorters distance,last
+    iterc experiment fig3a                    # trajectories, 'last' sorter
     iterc experiment all --quick --out results/
     iterc experiment synthesis-table --max-n 6
 

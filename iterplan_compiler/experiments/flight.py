@@ -12,13 +12,14 @@ The thin adapter between the experiments/demo and the runtime's executor
   Search and Map (``store.target`` adds the current cell; sensor ``adjacent`` answers for cells
   next to a stored one; ``"derived"`` in search_and_map.json).
 
-Compute-time accounting stays on (``ideal_compute=False``): time the plan spends iterating is
-flight time, as in the paper.
+Both go through the executor's ``RunConfig.on_event`` hook.  Compute-time accounting stays on
+(``ideal_compute=False``): time the plan spends iterating is flight time, as in the paper; it
+is measured as CPU time of the mission's process (``compute_clock=time.process_time``), so a
+busy machine or parallel missions do not inflate it.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -47,10 +48,6 @@ class FlightResult:
     ok: bool = True
     reason: str = ""
     mission: object = None   # the runtime's MissionResult (PNG/GeoJSON writers)
-
-
-class _Stop(Exception):
-    pass
 
 
 def example_bindings(grid, data: dict | None):
@@ -97,35 +94,6 @@ def example_bindings(grid, data: dict | None):
     return b
 
 
-class _CpuTime:
-    """Stand-in for the ``time`` module as seen by the executor: ``perf_counter`` is the
-    process CPU clock, everything else is the real module."""
-
-    def __getattr__(self, name):
-        return getattr(time, name)
-
-    @staticmethod
-    def perf_counter() -> float:
-        return time.process_time()
-
-
-class _executor_cpu_clock:
-    """Context manager: while a mission runs in *this* process, the executor's think-time
-    measurement uses CPU time.  Only needed until the runtime's RunConfig offers a
-    ``compute_clock`` (then :func:`fly` sets that instead)."""
-
-    def __enter__(self):
-        from iterplan_compiler.runtime import executor
-
-        self._mod = executor
-        self._saved = executor.time
-        executor.time = _CpuTime()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self._mod.time = self._saved
-
-
 def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
@@ -134,12 +102,7 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
     ``max_time`` simulated seconds).  Raises :class:`StageError` if the runtime is missing or
     the module cannot be loaded."""
     try:
-        from iterplan_compiler.runtime.executor import (
-            Executor,
-            MissionEnd,
-            RunConfig,
-            load_controller,
-        )
+        from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
         from iterplan_compiler.runtime.sim import SimVehicle
     except ImportError as exc:
         raise StageError("runtime", f"the executor is not available in this build ({exc})") \
@@ -151,52 +114,41 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
 
     events: list[LogEvent] = []
     keep = None if full_log else KEEP
+    holder: dict = {}
 
-    class _Recorder(Executor):
-        """Executor whose log goes through the stop predicate and the compact log."""
-
-        def log_entry(self, kind: str, label: str, cell: int = -1) -> None:
-            if kind not in ("c", "u"):
-                if full_log:
-                    super().log_entry(kind, label, cell)
-                return
-            if keep is not None and label not in keep:
-                return
-            if label == "arrived":
-                cell = self.ctx.last_arrival if self.ctx.last_arrival is not None else -1
-            elif label in ("take.photo", "store.target") or label.startswith("visited."):
-                c = self.ctx.current_cell()
-                cell = -1 if c is None else c
-            elif label == "go.next":
-                n = self.iterator.next
-                cell = -1 if n is None else n
-            p = self.vehicle.pose()
-            ev = LogEvent(round(p.t - self.t0, 3), label, int(cell), p.x, p.y)
-            events.append(ev)
-            if on_event is not None:
-                on_event(ev)
-            if stop is not None and stop(ev):
-                raise MissionEnd(True, "stop condition reached")
+    def on_controller_event(kind: str, label: str) -> bool:
+        """Compact log + stop predicate; ``True`` ends the mission (successfully)."""
+        if keep is not None and label not in keep:
+            return False
+        ex = holder["ex"]
+        cell = -1
+        if label == "arrived":
+            cell = ex.ctx.last_arrival if ex.ctx.last_arrival is not None else -1
+        elif label in ("take.photo", "store.target") or label.startswith("visited."):
+            c = ex.ctx.current_cell()
+            cell = -1 if c is None else c
+        elif label == "go.next":
+            n = ex.iterator.next
+            cell = -1 if n is None else n
+        p = ex.vehicle.pose()
+        ev = LogEvent(round(p.t - ex.t0, 3), label, int(cell), p.x, p.y)
+        events.append(ev)
+        if on_event is not None:
+            on_event(ev)
+        return bool(stop is not None and stop(ev))
 
     vehicle = SimVehicle(home=grid.home, heading=grid.arrival_heading)
+    # compute_clock: charge CPU time of this process, not wall time, so the think-time charge
+    # does not depend on how busy the machine is (sweeps run missions in parallel processes).
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
-                    max_time=max_time, log_limit=10**12, end_action="loiter")
-    # log_limit: the executor calls log_entry only while its log is below the limit; our
-    # override keeps its own compact log (self.log stays empty unless full_log).
-    # Charge CPU time of this process, not wall time: the think-time charge must not depend on
-    # how busy the machine is (sweeps run several missions in parallel processes).
-    cpu_clock = "compute_clock" in {f.name for f in dataclasses.fields(RunConfig)}
-    if cpu_clock:
-        cfg.compute_clock = time.process_time
+                    max_time=max_time, log_limit=0, end_action="loiter",
+                    compute_clock=time.process_time, on_event=on_controller_event)
     try:
-        ex = _Recorder(table, grid, vehicle, example_bindings(grid, map_data), cfg)
+        ex = Executor(table, grid, vehicle, example_bindings(grid, map_data), cfg)
     except ValueError as exc:   # BindingError is a ValueError: the map lacks a sensor
         raise StageError("runtime", str(exc)) from None
-    if cpu_clock:
-        result = ex.run()
-    else:
-        with _executor_cpu_clock():
-            result = ex.run()
+    holder["ex"] = ex
+    result = ex.run()
     track = [(float(t), float(x), float(y)) for t, x, y, _ in result.track]
     return FlightResult(events, float(vehicle.airspeed), track, dict(result.summary),
                         bool(result.ok), str(result.reason), result)

@@ -1,1 +1,1 @@
-"""symbolic stage of the iterplan compiler."""
+"""BDD utilities over ``dd`` (``bdd.new_manager``: dd.cudd if importable, else dd.autoref)."""

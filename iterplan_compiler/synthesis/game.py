@@ -185,6 +185,7 @@ class SymbolicGame:
         self.tu = b.exist(self.act_vars, self.trans & unc)
         self.tc = b.exist(self.act_vars, self.trans & ctl)
         self.env = b.exist(self.nxt_vars, self.tu)
+        self.tc_own = self.tc & ~self.env  # controllable moves matter in controller states only
         self.t_any = self.tu | self.tc
         # goal sets over fluent-monitor bits
         nbody = spec.num_plant + spec.num_safety
@@ -215,8 +216,23 @@ class SymbolicGame:
         b = self.bdd
         xn = self.to_next(X)
         env_bad = and_exists(b, self.tu, ~xn, self.nxt_vars)
-        ctrl_good = and_exists(b, self.tc, xn, self.nxt_vars)
-        return (self.env & ~env_bad) | (~self.env & ctrl_good)
+        ctrl_good = and_exists(b, self.tc_own, xn, self.nxt_vars)
+        return (self.env & ~env_bad) | ctrl_good
+
+    def restrict(self, care: Any) -> None:
+        """Restrict the game relations to ``care`` (e.g. the reachable states).
+
+        Only sound for a forward-closed ``care`` (every successor of a care state is a care
+        state): then no relevant edge is lost and no CPre result carries unreachable states
+        (a small gain on the benchmark, within noise on a loaded machine).  The controllable
+        relation used by CPre is restricted to controller-owned sources, the only ones where
+        it matters (§3.3).
+        """
+        cn = self.to_next(care)
+        self.tu = self.tu & care & cn
+        self.tc = self.tc & care & cn
+        self.tc_own = self.tc & ~self.env
+        self.t_any = self.t_any & care & cn
 
     def post(self, X: Any) -> Any:
         return self.to_cur(and_exists(self.bdd, self.t_any, X, self.cur_vars))
@@ -336,6 +352,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["t_encode"] = time.perf_counter() - t
     t = time.perf_counter()
     reach = g.reachable()
+    g.restrict(reach)
     stats["t_reach"] = time.perf_counter() - t
     live = reach & ~g.error
     stats["game_states"] = g.count(live) + (1 if (reach & g.error) != g.bdd.false else 0)

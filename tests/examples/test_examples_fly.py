@@ -85,8 +85,8 @@ def test_ordered_patrol_visits_in_order(compiled):
 
 
 def test_search_and_map_maps_around_the_target_then_lands(compiled):
-    # Stop at the plan's decision to land (the simulator's landing is the runtime's business).
-    res, grid = _fly(compiled, "search_and_map", lambda e: e.label == "land")
+    # One mission: search, map, land; `restart` would begin the next one.
+    res, grid = _fly(compiled, "search_and_map", lambda e: e.label == "restart")
     target = int(grid.sensors["target"][0])
     log = res.log
     stored = [e.cell for e in log if e.label == "store.target"]
@@ -102,5 +102,5 @@ def test_search_and_map_maps_around_the_target_then_lands(compiled):
     assert photos == ring
     # after the target was found, the plane only flies to cells adjacent to it
     assert set(cells(log[i_store + 1:], "arrived")) <= ring
-    assert log[-1].label == "land"
+    assert [e.label for e in log[-3:]] == ["land", "landed", "restart"]
     assert sum(e.label == "n.next" for e in log[i_store:]) == 2
