@@ -1,7 +1,9 @@
 """``iterc check SPEC`` — parse and elaborate a spec, report diagnostics.
 
-With ``--build`` every process and composite is also built (composed, synthesised when a
-synthesis keyword asks for it), which finds errors that only show when a machine is built.
+With ``--build`` every process, composite and safety formula *declared in SPEC itself* is also
+built (composed, synthesised when a synthesis keyword asks for it), which finds errors that only
+show when a machine is built; declarations of included files are built only when SPEC's own
+machines use them (a library fragment may need sets that only the including file declares).
 With ``--print`` the parsed file is printed back as canonical FSP on stdout (the printer of
 ``frontend/printer.py``; parsing the output gives the same syntax tree), and with
 ``--legality NAME`` MTSA's legality check is run on composite NAME (machine 0 is the
@@ -23,7 +25,8 @@ HELP = "parse and elaborate a spec; report diagnostics"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("spec", help="FSP specification file (.lts)")
     parser.add_argument("--build", action="store_true",
-                        help="also build every process and composite")
+                        help="also build every process and composite declared in SPEC "
+                        "(and what they use from included files)")
     parser.add_argument("-q", "--quiet", action="store_true", help="do not print warnings")
     parser.add_argument("--print", dest="print_fsp", action="store_true",
                         help="print the file back as canonical FSP (includes not expanded)")
@@ -39,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
         return _print(args.spec)
     model, diags = load(args.spec)
     if model is not None and args.build:
-        for name in model.names():
+        for name in model.own_names():
             _, ds = model.build_lts(name)
             diags += [d for d in ds if d not in diags]
     shown = [d for d in diags if d.is_error or not args.quiet]

@@ -43,6 +43,11 @@ def run(args: argparse.Namespace) -> int:
     kind = args.emit
     if kind is None:
         kind = _SUFFIX_KIND.get(Path(args.output).suffix.lower(), "py") if args.output else "py"
+    if args.output and not Path(args.output).parent.is_dir():
+        # Checked before synthesis, which may take a while, only to fail at the very end.
+        print(f"iterc compile: cannot write {args.output}: no such directory "
+              f"'{Path(args.output).parent}'", file=sys.stderr)
+        return 1
     out = compile_spec(args.spec, composite=args.composite, emit_kind=kind, solver=args.solver)
     if out.diagnostics:
         print(render(out.diagnostics, out.sources), file=sys.stderr)

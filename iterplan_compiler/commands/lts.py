@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from iterplan_compiler.diagnostics import has_errors, render
+from iterplan_compiler.diagnostics import Span, error, has_errors, render
 
 HELP = "compose a process or composite and print it"
 
@@ -24,21 +24,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from iterplan_compiler.frontend import load, parse_file
+    import difflib
 
-    model, diags = load(args.spec)
+    from iterplan_compiler.frontend import load_with_sources
+
+    model, diags, sources = load_with_sources(args.spec)
     if model is None or has_errors(diags):
-        sources = model.sources if model is not None else parse_file(args.spec)[2]
         print(render([d for d in diags if d.is_error], sources), file=sys.stderr)
         return 1
+    whole_file = Span(args.spec, 0, 0)
     name = args.name or model.default_name()
+    # E504 as `iterc dot SPEC NAME` (the same mistake gets the same code in both commands)
     if name is None:
-        print(f"{args.spec}: no process or composite to build", file=sys.stderr)
+        print(render([error("E504", "the spec defines no process or composite to build",
+                            whole_file)]), file=sys.stderr)
         return 1
     if name not in model.names() and name != "DEFAULT":  # DEFAULT: MTSA's all-processes
-        known = ", ".join(model.names()) or "none"
-        print(f"iterc lts: unknown name '{name}' (known: {known})", file=sys.stderr)
-        return 2
+        close = difflib.get_close_matches(name, model.names(), n=1)
+        hint = (f"did you mean '{close[0]}'?" if close
+                else "defined: " + (", ".join(model.names()) or "none"))
+        print(render([error("E504", f"no process or composite named '{name}'; {hint}",
+                            whole_file)]), file=sys.stderr)
+        return 1
     lts, ds = model.build_lts(name)
     errs = [d for d in ds if d.is_error]
     if errs or lts is None:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 HELP = "synthesise a controller for a controller composite and report"
 
@@ -28,52 +27,67 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default="clustered", help="BDD variable order (symbolic solver)")
 
 
+#: composite keywords that ask for a controller (``checkCompatibility`` only checks the spec)
+_CONTROLLER_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector"})
+
+
 def _pick_composite(model) -> str | None:
-    specs = getattr(model, "synthesis_composites", None)
-    if callable(specs):
-        names = list(specs())
-        return names[-1] if names else None
-    for name in reversed(list(model.names())):
-        problem, diags = model.synthesis_problem(name)
-        if problem is not None:
+    """The last composite of SPEC that asks for synthesis (by its keywords; cheap: nothing
+    is built)."""
+    for name in reversed(model.composites):
+        if model.composite_keywords.get(name, frozenset()) & _CONTROLLER_KEYWORDS:
             return name
     return None
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run synthesis and print the report; return the exit code."""
-    from iterplan_compiler.diagnostics import has_errors, render
+    """Run synthesis and print the report; return the exit code.
 
-    path = Path(args.spec)
-    if not path.is_file():
-        print(f"iterc synth: no such file: {args.spec}", file=sys.stderr)
-        return 2
+    Every problem with the input (unreadable SPEC, syntax/elaboration errors, no controller
+    composite, unknown COMPOSITE, a goal synthesis cannot pose as a game) is a diagnostic
+    rendered with its source line, and exit code 1.
+    """
+    import difflib
+
+    from iterplan_compiler.diagnostics import Span, error, has_errors, render
+
     try:
-        from iterplan_compiler.frontend import load
+        from iterplan_compiler.frontend import load_with_sources
     except ImportError as exc:
         print(f"iterc synth: the front-end is not available ({exc})", file=sys.stderr)
         return 3
     from iterplan_compiler.synthesis.driver import synthesize
 
-    model, diags = load(str(path))
+    model, diags, sources = load_with_sources(args.spec)
     if diags:
-        print(render(diags), file=sys.stderr)
+        print(render(diags, sources), file=sys.stderr)
     if model is None or has_errors(diags):
         return 1
-    name = args.composite or _pick_composite(model)
+    whole_file = Span(args.spec, 0, 0)
+    name = args.composite
     if name is None:
-        print("iterc synth: SPEC has no controller composite", file=sys.stderr)
-        return 2
+        name = _pick_composite(model)
+        if name is None:
+            print(render([error("E502", "no controller composite to synthesise (write "
+                                "`controller ||C = (Plant)~{Spec}.`)", whole_file)]),
+                  file=sys.stderr)
+            return 1
+    elif name not in model.composites:
+        close = difflib.get_close_matches(name, model.composites, n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        print(render([error("E502", f"no composite named '{name}'{hint}", whole_file)]),
+              file=sys.stderr)
+        return 1
     problem, pdiags = model.synthesis_problem(name)
     if pdiags:
-        print(render(pdiags), file=sys.stderr)
+        print(render(pdiags, sources), file=sys.stderr)
     if problem is None or has_errors(pdiags):
         return 1
     result = synthesize(problem, solver=args.solver, explain=args.explain, order=args.order)
-    if result.diagnostics:
-        print(render(list(result.diagnostics)), file=sys.stderr)
-        return 1
     print(format_report(name, result))
+    if result.diagnostics:
+        # why the problem could not be posed as a game (e.g. S002): shown with the verdict
+        print(render(list(result.diagnostics), sources), file=sys.stderr)
     if not result.realizable and args.explain and result.explanation:
         print(result.explanation)
     return 0 if result.realizable else 1
@@ -82,18 +96,20 @@ def run(args: argparse.Namespace) -> int:
 def format_report(name: str, result) -> str:
     """The human-readable report printed by ``iterc synth``."""
     st = result.stats
-    lines = [f"{name}: {'realizable' if result.realizable else 'UNREALIZABLE'}"
-             f" ({st.get('solver')} solver, {st.get('mode')} semantics)"]
-    lines.append(f"  game: {st.get('game_states', '?')} states"
-                 + (f", winning {st['winning_states']}" if "winning_states" in st else "")
-                 + (f", |T| = {st['trans_bdd_nodes']} BDD nodes over {st['bdd_vars']} vars"
-                    if "trans_bdd_nodes" in st else ""))
+    how = f"{st.get('solver')} solver" + (f", {st['mode']} semantics" if "mode" in st else "")
+    lines = [f"{name}: {'realizable' if result.realizable else 'UNREALIZABLE'} ({how})"]
+    if "game_states" in st:
+        lines.append(f"  game: {st.get('game_states', '?')} states"
+                     + (f", winning {st['winning_states']}" if "winning_states" in st else "")
+                     + (f", |T| = {st['trans_bdd_nodes']} BDD nodes over {st['bdd_vars']} vars"
+                        if "trans_bdd_nodes" in st else ""))
     if result.realizable:
         lines.append(f"  controller: {st.get('controller_states')} states, "
                      f"{st.get('controller_transitions')} transitions; controlled system "
                      f"{st.get('composition_states')} states")
     phases = [k for k in st if k.startswith("t_")]
-    lines.append("  time: " + ", ".join(f"{k[2:]} {st[k]:.3f}s" for k in phases))
+    if phases:
+        lines.append("  time: " + ", ".join(f"{k[2:]} {st[k]:.3f}s" for k in phases))
     for w in st.get("warnings", ()):
         lines.append(f"  warning: {w}")
     return "\n".join(lines)

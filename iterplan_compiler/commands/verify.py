@@ -63,6 +63,15 @@ def _missing(name: str, known, spec: str, *, what: str = "assert",
                  Span(spec, 0, 0))
 
 
+def _is_state_formula(formula) -> bool:
+    """True iff ``formula`` has no temporal operator (X, [], <>, U, W)."""
+    from iterplan_compiler.fltl.semantics import subformulas
+    from iterplan_compiler.ir.formulas import Always, Eventually, Next, Until, WeakUntil
+
+    temporal = (Next, Always, Eventually, Until, WeakUntil)
+    return not any(isinstance(f, temporal) for f in subformulas(formula))
+
+
 def run(args: argparse.Namespace) -> int:
     """Check; diagnostics to stderr, verdicts and traces to stdout."""
     from iterplan_compiler import frontend
@@ -112,6 +121,12 @@ def run(args: argparse.Namespace) -> int:
             print(f"assert {nf.name} on {args.target}: Violation of LTL property {nf.name}")
             print(f"Trace to property violation in {args.target}:")
             print(result.counterexample.render())
+            if _is_state_formula(nf.formula):
+                # A frequent surprise: `assert G = (F)` means []<>F only as a controllerSpec
+                # liveness goal; checked on its own it is a condition on the first position.
+                print(f"  note: {nf.name} has no temporal operator, so it is checked at the "
+                      "first position only (as a controllerSpec liveness goal it means "
+                      f"[]<>{nf.name})")
         if result.error_reachable:
             print(f"  note: {args.target} can reach ERROR (a safety property is violated); "
                   "runs end there")

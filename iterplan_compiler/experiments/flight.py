@@ -6,15 +6,16 @@ The thin adapter between the experiments/demo and the runtime's executor
 * a *stop predicate* over executed events (the executor itself stops after ``passes`` iterator
   passes or a time limit; experiments need "after the 3rd visit of p.0" or "once the region is
   covered"), and a compact log of the events the measurements need, so a 700,000-location
-  mission does not keep millions of log entries;
-* the example-specific bindings the bundled maps ask for: a Nemo that leaves after being seen
-  ``yes_answers`` times (``"dynamic"`` in find_nemo.json) and the shared data structure of
-  Search and Map (``store.target`` adds the current cell; sensor ``adjacent`` answers for cells
-  next to a stored one; ``"derived"`` in search_and_map.json).
+  mission does not keep millions of log entries.
 
-Both go through the executor's ``RunConfig.on_event`` hook.  Compute-time accounting stays on
-(``ideal_compute=False``): time the plan spends iterating is flight time, as in the paper; it
-is measured as CPU time of the mission's process (``compute_clock=time.process_time``), so a
+The bundled maps' sensor rules (a Nemo that leaves after being seen ``yes_answers`` times,
+``"dynamic"`` in find_nemo.json; the shared data structure of Search and Map, ``"derived"`` in
+search_and_map.json) are implemented by the runtime itself (``grid.load_map`` reads them,
+``bindings.map_rule_bindings`` serves them), exactly as ``iterc run`` flies them.
+
+The stop predicate goes through the executor's ``RunConfig.on_event`` hook.  Compute-time
+accounting stays on (``ideal_compute=False``): time the plan spends iterating is flight time, as
+in the paper; it is measured as CPU time of the mission's process (``compute_clock=time.process_time``), so a
 busy machine or parallel missions do not inflate it.
 """
 
@@ -51,47 +52,22 @@ class FlightResult:
 
 
 def example_bindings(grid, data: dict | None):
-    """Runtime bindings for the bundled maps' ``dynamic`` / ``derived`` sensors."""
-    from iterplan_compiler.runtime.bindings import Bindings
+    """Runtime bindings for the ``dynamic`` / ``derived`` sensor rules in map data ``data``
+    (default: the rules :func:`~iterplan_compiler.runtime.grid.load_map` put on ``grid``).
 
-    b = Bindings()
-    data = data or {}
-    for name, spec in (data.get("dynamic") or {}).items():
-        cells = {int(c) for c in grid.sensors.get(name, [])}
-        limit = int(spec.get("yes_answers", 1))
-        seen: dict[int, int] = {}
+    A thin wrapper: the rules are implemented once, in the runtime
+    (:func:`iterplan_compiler.runtime.bindings.map_rule_bindings`), so ``iterc run`` and the
+    experiments fly the same thing.  Raises :class:`StageError` for malformed rules."""
+    from iterplan_compiler.runtime.bindings import map_rule_bindings
+    from iterplan_compiler.runtime.grid import MapError, parse_sensor_rules
 
-        def pred(cell: int, cells=cells, limit=limit, seen=seen) -> bool:
-            if cell not in cells or seen.get(cell, 0) >= limit:
-                return False
-            seen[cell] = seen.get(cell, 0) + 1
-            return True
-
-        b.sensor(name, pred)
-    for name, spec in (data.get("derived") or {}).items():
-        action = str(spec.get("neighbours_of", "store.target"))
-        conn = int(spec.get("connectivity", 8))
-        stored: set[int] = set()
-        cols = grid.cols
-
-        def store(ctx, label: str, stored=stored) -> None:
-            cell = ctx.current_cell()
-            if cell is not None and cell >= 0:
-                stored.add(int(cell))
-                ctx.note(f"stored {ctx.grid.cell_name(int(cell))}")
-
-        def adjacent(cell: int, stored=stored, cols=cols, conn=conn) -> bool:
-            r, c = divmod(int(cell), cols)
-            for s in stored:
-                sr, sc = divmod(s, cols)
-                dr, dc = abs(sr - r), abs(sc - c)
-                if (dr <= 1 and dc <= 1) if conn == 8 else (dr + dc <= 1):
-                    return True
-            return False
-
-        b.bind(action, store)
-        b.sensor(name, adjacent)
-    return b
+    if data is None:
+        return map_rule_bindings(grid)
+    try:
+        dynamic, derived = parse_sensor_rules(data, grid.sensors)
+    except MapError as exc:
+        raise StageError("map", str(exc)) from None
+    return map_rule_bindings(grid, dynamic=dynamic, derived=derived)
 
 
 def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
@@ -144,7 +120,9 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
                     max_time=max_time, log_limit=0, end_action="loiter",
                     compute_clock=time.process_time, on_event=on_controller_event)
     try:
-        ex = Executor(table, grid, vehicle, example_bindings(grid, map_data), cfg)
+        # map_data=None: the rules load_map put on the grid (the executor applies them itself).
+        bindings = None if map_data is None else example_bindings(grid, map_data)
+        ex = Executor(table, grid, vehicle, bindings, cfg)
     except ValueError as exc:   # BindingError is a ValueError: the map lacks a sensor
         raise StageError("runtime", str(exc)) from None
     holder["ex"] = ex

@@ -128,6 +128,11 @@ def safety_lts(
     except StateLimitExceeded:
         return None, [error(E_TOO_LARGE, f"{kind} {named.name}: the formula's automaton exceeds "
                                          f"{max_states} states", named.span)]
+    except RecursionError:
+        # The NNF/tableau code recurses over the formula tree; a formula nested ~1000 deep
+        # (generated specs) is a too-large input, not a compiler crash.
+        return None, [error(E_TOO_LARGE, f"{kind} {named.name}: the formula is nested too "
+                                         "deeply to translate", named.span)]
     if witness is not None:
         prefix, cycle = witness
         trace = " ".join([*prefix, "(" + " ".join(cycle) + ")^w"])

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors
 
-__all__ = ["load", "parse_file"]
+__all__ = ["load", "load_with_sources", "parse_file"]
 
 
 def parse_file(path: str, text: str | None = None):
@@ -41,10 +41,18 @@ def load(path: str, text: str | None = None):
     has syntax errors (elaboration errors still give a model, so callers can inspect what is
     well-formed, but ``has_errors(diagnostics)`` is then true).
     """
+    model, diags, _ = load_with_sources(path, text)
+    return model, diags
+
+
+def load_with_sources(path: str, text: str | None = None):
+    """:func:`load`, also returning ``sources`` (file name → text of the file and of every
+    include) so that callers can render diagnostics with source lines even when ``model`` is
+    ``None`` (syntax errors) without parsing the file twice."""
     from iterplan_compiler.frontend.elaborate import elaborate
 
     spec, diags, sources = parse_file(path, text)
     if spec is None or has_errors(diags):
-        return None, diags
+        return None, diags, sources
     model, ds = elaborate(spec, sources[path], sources)
-    return model, diags + ds
+    return model, diags + ds, sources

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
+from dataclasses import replace
 from fractions import Fraction
 
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
@@ -103,6 +104,13 @@ class Elaborator(ModelBackend):
         self.specs: dict[str, ControllerSpec] = {}
         self.formula_errors: dict[str, Diagnostic] = {}
         self.cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
+        # synthesised composites by instance name: a controller composite built at top level
+        # and again as a component of another composite is synthesised once
+        self.synth_cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
+        # the problem each synthesised instance was solved as (after §3.8), and the instances
+        # found unrealizable: `build_lts(name, unrealizable="plant")` returns their plant
+        self.problems: dict[str, SynthesisProblem] = {}
+        self.unrealizable: set[str] = set()
         self.building: list[str] = []
         self._collect(diags)
 
@@ -176,6 +184,7 @@ class Elaborator(ModelBackend):
         self._formulas(diags)
         self._specs(diags)
         self._check_recursion(diags)
+        self._check_composite_names(diags)
 
     def _check_keywords(self, kws: tuple[str, ...], span: Span, diags: list[Diagnostic]) -> None:
         pos = [OP_ORDER.index(k) for k in kws]
@@ -315,6 +324,27 @@ class Elaborator(ModelBackend):
             return True
         return n in self.formula_decls and self.formula_decls[n].kind == "assert"
 
+    # ------------------------------------------------------------------ names (static)
+    def _check_composite_names(self, diags: list[Diagnostic]) -> None:
+        """Resolve the names a composite uses without building it (so ``iterc check`` finds
+        them): every component must be a process, composite or ``ltl_property``/``constraint``
+        (E0102 at the reference), every ``~{G}`` a controllerSpec (E0701 at the tail)."""
+        for d in self.composites.values():
+            refs: list[S.CRef] = []
+            _cb_crefs(d.body, refs)
+            for r in refs:
+                if not self._component_ok(r.name):
+                    diags.append(error("E0102", f"undefined process or composite '{r.name}'",
+                                       r.span))
+            for t in d.tails:
+                if t.kind == "spec" and t.name not in self.spec_decls:
+                    diags.append(error("E0701", f"undefined controllerSpec '{t.name}'",
+                                       t.span if t.span.line > 0 else d.span))
+
+    def _component_ok(self, name: str) -> bool:
+        return (name in self.processes or name in self.composites or name == "DEFAULT"
+                or (name in self.formula_decls and self.formula_decls[name].kind != "assert"))
+
     # ------------------------------------------------------------------ recursion (static)
     def _check_recursion(self, diags: list[Diagnostic]) -> None:
         graph: dict[str, set[str]] = {}
@@ -332,7 +362,21 @@ class Elaborator(ModelBackend):
                                    + " -> ".join([*path, path[0]]), d.span))
 
     # ------------------------------------------------------------------ building
-    def build_lts(self, name: str) -> tuple[LTS | None, list[Diagnostic]]:
+    def build_lts(self, name: str, unrealizable: str = "error"
+                  ) -> tuple[LTS | None, list[Diagnostic]]:
+        """See :meth:`Model.build_lts`."""
+        lts, diags = self._build_top(name)
+        if unrealizable == "plant" and lts is None and name in self.unrealizable:
+            plant, ds = self.unrealizable_plant(name)
+            if plant is not None:
+                # the verdict stays visible, as a warning: the caller asked for the plant
+                kept = [x for x in diags if not (x.code == "E0901" and x.is_error)]
+                note = warning("W0902", f"{name}: no controller exists (unrealizable); this "
+                               f"is the plant {plant.name}", self.composites[name].span)
+                return plant, [*kept, note, *ds]
+        return lts, diags
+
+    def _build_top(self, name: str) -> tuple[LTS | None, list[Diagnostic]]:
         key = "<top>" + name  # top-level names prefer composites; `get` prefers processes
         if key in self.cache:
             return self.cache[key]
@@ -501,7 +545,10 @@ class Elaborator(ModelBackend):
         """
         env = self.env().with_params(self._params(d.params, args, d.name, d.span))
         kws = set(d.keywords)
-        if kws & SYNTHESIS_KEYWORDS:
+        if "checkCompatibility" in kws and not kws & (SYNTHESIS_KEYWORDS
+                                                      - {"checkCompatibility"}):
+            lts = self._compatibility(d, env, inst, diags)
+        elif kws & SYNTHESIS_KEYWORDS:
             lts = self._synthesised(d, inst, diags)
         elif kws & PLANT_KEYWORDS:
             lts = self._plant_operators(d, env, inst, diags)
@@ -724,9 +771,16 @@ class Elaborator(ModelBackend):
         return frozenset()
 
     def synthesis_problem(self, name: str) -> tuple[SynthesisProblem | None, list[Diagnostic]]:
+        """The problem synthesis solves for composite ``name`` -- the same one ``build_lts``
+        solves, so ``iterc synth``/``compile`` and ``iterc lts`` agree: a nondeterministic or
+        tau plant is already controlled-determinised (§3.8, :meth:`_controlled_det_problem`)."""
         diags: list[Diagnostic] = []
         try:
-            return self._problem(name, diags), diags
+            problem = self._problem(name, diags)
+            d = self.composites.get(name)
+            if problem is not None and d is not None:
+                problem = self._controlled_det_problem(problem, d, diags)
+            return problem, diags
         except EvalError as e:
             diags.append(e.diag)
             return None, diags
@@ -734,7 +788,8 @@ class Elaborator(ModelBackend):
     def _problem(self, name: str, diags: list[Diagnostic]) -> SynthesisProblem | None:
         d = self.composites.get(name)
         if d is None:
-            diags.append(error("E0102", f"undefined composite '{name}'", Span("<input>", 0, 0)))
+            diags.append(error("E0102", f"undefined composite '{name}'",
+                               Span(self.spec.path, 0, 0)))
             return None
         spec_name = self._spec_of(d)
         if spec_name is None or spec_name not in self.specs:
@@ -776,12 +831,101 @@ class Elaborator(ModelBackend):
             safety=tuple(safety), assumptions=assumptions, guarantees=guarantees,
             failures=failures, fluents=tuple(self.fluents[u] for u in sorted(used)),
             controllable=spec.controllable, marking=spec.marking, nonblocking=spec.nonblocking,
-            spec_name=spec.name, span=d.span)
+            spec_name=spec.name, span=d.span, permissive="permissive" in spec.flags)
 
-    def _synthesised(self, d: S.CompositeDecl, inst: str, diags: list[Diagnostic]) -> LTS | None:
+    def _controlled_det_problem(self, problem: SynthesisProblem, d: S.CompositeDecl,
+                                diags: list[Diagnostic]) -> SynthesisProblem | None:
+        """MTSA §3.8 for ``controller``/``gr`` without ``nonblocking``: when the plant product
+        ``P = body ∥ safety machines`` has tau moves or is nondeterministic, the game is played
+        on the *controlled determinisation* of ``P`` (tau moves removed first: hidden actions
+        are unobservable), whose extra action ``-1`` is uncontrollable.  Otherwise (the normal
+        case) the problem is returned unchanged, its components not composed here."""
+        from iterplan_compiler.frontend.operators import (
+            controlled_determinisation,
+            eliminate_tau,
+        )
+        from iterplan_compiler.ir import alphabet_ops as ops
+        from iterplan_compiler.ir.compose import StateExplosion, compose
+
+        kws = problem.keywords
+        if (not kws & {"controller", "gr"} or problem.nonblocking
+                or kws & {"heuristic", "monolithicDirector", "checkCompatibility"}):
+            return problem
+        machines = [*problem.plant, *problem.safety]
+        # a product of deterministic tau-free machines is deterministic: compose only if needed
+        if all(ops.is_deterministic(m) for m in machines):
+            return problem
+        try:
+            plant = compose(machines, problem.name, max_states=MAX_STATES)
+        except StateExplosion as e:
+            diags.append(error("E0402", f"composing the plant of {problem.name}: {e}", d.span))
+            return None
+        if ops.is_deterministic(plant):
+            return problem
+        if any(a == TAU for _, a, _ in plant.transitions):
+            plant = eliminate_tau(plant)
+        det = reachable(controlled_determinisation(plant, problem.controllable, problem.name))
+        return replace(problem, plant=(det,), safety=())
+
+    def _compatibility(self, d: S.CompositeDecl, env: Env, inst: str,
+                       diags: list[Diagnostic]) -> LTS | None:
+        """``checkCompatibility ||C = E~{G}`` (§3.11): MTSA only prints whether the spec's
+        assumptions are compatible with the plant.  We report "NOT compatible" as warning
+        W0903 and build the plant product (body ∥ safety machines) as the composite."""
         problem = self._problem(d.name, diags)
         if problem is None:
             return None
+        try:
+            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
+            compatible, message = driver.check_compatibility(problem)
+        except ImportError:
+            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
+                               "available in this build", d.span))
+            return None
+        except Exception as e:  # SynthesisError (e.g. a temporal goal) or a synthesis bug
+            diags.append(error("E0901", f"compatibility check of {d.name} failed: "
+                               f"{getattr(e, 'message', e)}", d.span))
+            return None
+        if not compatible:
+            diags.append(warning("W0903", f"{d.name}: {message}", d.span))
+        return self._compose([*problem.plant, *problem.safety], d, env, inst, diags)
+
+    def unrealizable_plant(self, name: str) -> tuple[LTS | None, list[Diagnostic]]:
+        """MTSA's composition of an unrealizable ``controller`` composite (§3.7): the plant
+        the game was played on (after §3.8), operators and hiding applied, named
+        ``name_#NC#``.  ``(None, [])`` when ``name`` was not built or is not unrealizable."""
+        from iterplan_compiler.ir.compose import StateExplosion, compose
+
+        d = self.composites.get(name)
+        problem = self.problems.get(name)
+        if d is None or problem is None or name not in self.unrealizable:
+            return None, []
+        diags: list[Diagnostic] = []
+        try:
+            plant = compose([*problem.plant, *problem.safety], f"{name}_#NC#",
+                            max_states=MAX_STATES)
+        except StateExplosion as e:
+            return None, [error("E0402", f"composing the plant of {name}: {e}", d.span)]
+        env = self.env().with_params(self._params(d.params, (), d.name, d.span))
+        lts = self._post_synthesis(plant, d, env, diags)
+        return lts, diags
+
+    def _synthesised(self, d: S.CompositeDecl, inst: str, diags: list[Diagnostic]) -> LTS | None:
+        if inst not in self.synth_cache:
+            local: list[Diagnostic] = []
+            self.synth_cache[inst] = (self._synthesise(d, inst, local), local)
+        lts, ds = self.synth_cache[inst]
+        diags.extend(x for x in ds if x not in diags)
+        return lts
+
+    def _synthesise(self, d: S.CompositeDecl, inst: str, diags: list[Diagnostic]) -> LTS | None:
+        problem = self._problem(d.name, diags)
+        if problem is None:
+            return None
+        problem = self._controlled_det_problem(problem, d, diags)
+        if problem is None:
+            return None
+        self.problems[inst] = problem
         try:
             driver = importlib.import_module("iterplan_compiler.synthesis.driver")
             synthesize = driver.synthesize
@@ -795,6 +939,7 @@ class Elaborator(ModelBackend):
             diags.append(error("E0901", f"synthesis of {d.name} failed: {e}", d.span))
             return None
         if not result.realizable:
+            self.unrealizable.add(inst)
             diags.append(error("E0901", f"{d.name}: no controller exists (unrealizable)"
                                + (f": {result.explanation}" if result.explanation else ""),
                                d.span))
@@ -839,6 +984,23 @@ def _cb_refs(b: S.CBody, out: set[str]) -> None:
         _cb_refs(b.prim, out)
 
 
+def _cb_crefs(b: S.CBody, out: list[S.CRef]) -> None:
+    """Every component reference of a composite body, in source order."""
+    if isinstance(b, S.CRef):
+        out.append(b)
+    elif isinstance(b, S.CPar):
+        for it in b.items:
+            _cb_crefs(it, out)
+    elif isinstance(b, S.CForall):
+        _cb_crefs(b.body, out)
+    elif isinstance(b, S.CIf):
+        _cb_crefs(b.then, out)
+        if b.other is not None:
+            _cb_crefs(b.other, out)
+    elif isinstance(b, S.CItem):
+        _cb_crefs(b.prim, out)
+
+
 def _find_cycle(graph: dict[str, set[str]], start: str) -> list[str] | None:
     """A cycle through ``start`` (as a path starting at ``start``), or None."""
     stack = [(start, [start])]
@@ -867,7 +1029,9 @@ def elaborate(spec: S.SpecFile, text: str, sources: dict[str, str] | None = None
         composite_keywords={n: frozenset(d.keywords) for n, d in el.composites.items()},
         fluents=el.fluents, formulas=el.formulas, controller_specs=el.specs,
         constants=consts, ranges=el.ranges, sets=el.sets, backend=el,
-        sources=dict(sources or {spec.path: text}))
+        sources=dict(sources or {spec.path: text}),
+        origins={n: d.span.file for table in (el.processes, el.composites, el.formula_decls)
+                 for n, d in table.items()})
     return model, diags
 
 

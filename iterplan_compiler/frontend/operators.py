@@ -13,7 +13,8 @@ from typing import NamedTuple
 
 from iterplan_compiler.ir.lts import ERROR, LTS, make_lts
 
-__all__ = ["CONTROL_ACTION", "STAR_ACTION", "controlled_determinisation", "star_environment"]
+__all__ = ["CONTROL_ACTION", "STAR_ACTION", "controlled_determinisation", "eliminate_tau",
+           "star_environment"]
 
 #: The label MTSA's controlled determinisation adds: the environment "hands the turn" to the
 #: controller in a knowledge state where some possible plant state offers no uncontrollable move.
@@ -104,6 +105,41 @@ def controlled_determinisation(lts: LTS, controllable: Iterable[str],
                   for n in order)
     return make_lts(name or lts.name, len(order), trans, alphabet | {CONTROL_ACTION},
                     initial=0, state_names=names)
+
+
+def eliminate_tau(lts: LTS, name: str | None = None) -> LTS:
+    """A tau-free, possibly nondeterministic LTS with the same weak moves as ``lts``.
+
+    ``s -a-> t`` for every ``s' -a-> t'`` with ``s'`` tau-reachable from ``s`` and ``t``
+    tau-reachable from ``t'`` (ERROR stays ERROR); a state is END if it tau-reaches an END
+    state.  This is what MTSA's "partial observability" path feeds to the controlled
+    determinisation (§3.8: hidden actions are unobservable to the controller).  A tau path
+    that ends in ERROR is dropped (the controller cannot see or prevent it; MTSA's treatment
+    of that corner is not documented).  The alphabet loses ``tau``.
+    """
+    from iterplan_compiler.ir.lts import TAU
+    from iterplan_compiler.ir.minimise import tau_closure
+
+    closure = tau_closure(lts)
+    succ: list[list[tuple[str, int]]] = [[] for _ in range(lts.num_states)]
+    for s, a, t in lts.transitions:
+        if a != TAU:
+            succ[s].append((a, t))
+    trans: set[tuple[int, str, int]] = set()
+    ends: set[int] = set()
+    for s in range(lts.num_states):
+        for m in closure[s]:
+            if m == ERROR:
+                continue
+            if m in lts.end_states:
+                ends.add(s)
+            for a, t in succ[m]:
+                if t == ERROR:
+                    trans.add((s, a, ERROR))
+                else:
+                    trans.update((s, a, u) for u in closure[t] if u != ERROR)
+    return make_lts(name or lts.name, lts.num_states, sorted(trans),
+                    set(lts.alphabet) - {TAU}, lts.initial, sorted(ends), lts.state_names)
 
 
 #: The label MTSA's starred environment model puts before each state's moves: the Java text of

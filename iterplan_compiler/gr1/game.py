@@ -164,11 +164,7 @@ class Game:
         ``target`` (which may mention current and next variables).
         """
         if self.options.partition:
-            s = target
-            if self.sys_pre_q:
-                s = self.bdd.exist(set(self.sys_pre_q), s)
-            for p in self.sys_parts:
-                s = self.and_exists(s, p.bdd, p.qvars)
+            s = self.sys_image(target)
             if self.env_pre_q:
                 s = self.bdd.forall(set(self.env_pre_q), s)
             for p in self.env_parts:
@@ -176,6 +172,17 @@ class Game:
             return s
         s = self.and_exists(self.sys_trans, target, self.yp)
         return self.or_forall(~self.env_trans, s, self.xp)
+
+    def sys_image(self, target: Node) -> Node:
+        """``∃y'. (ρs ∧ target)`` — the system half of the controllable predecessor."""
+        if not self.options.partition:
+            return self.and_exists(self.sys_trans, target, self.yp)
+        s = target
+        if self.sys_pre_q:
+            s = self.bdd.exist(set(self.sys_pre_q), s)
+        for p in self.sys_parts:
+            s = self.and_exists(s, p.bdd, p.qvars)
+        return s
 
     def cpre(self, states: Node) -> Node:
         """Controllable predecessor of a *state* set (``cpre_trans`` of its primed copy)."""

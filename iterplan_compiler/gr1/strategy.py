@@ -101,6 +101,8 @@ def build_strategy(game: Game, win: Winning) -> Strategy:
     yp = set(game.yp)
     per_goal: list[Node] = []
     for j, g in enumerate(game.sys_live):
+        # Each entry carries ρs, so the ∃y' images stay restricted to legal moves.  (A variant
+        # that factors ρs out and uses the partitioned image measured 2× slower on AMBA.)
         entries: list[Node] = [rho_s & g & zp]
         prev_ring = bdd.false
         for ring, xs in zip(win.y_layers[j], win.x_sets[j], strict=True):

@@ -66,6 +66,8 @@ class SynthesisProblem:
     nonblocking: bool = False
     spec_name: str = ""
     span: Span = field(default=NO_SPAN, compare=False)
+    #: the spec's ``permissive`` flag (§3.6: also keep winning, not rank-improving moves)
+    permissive: bool = False
 
 
 class ModelBackend:
@@ -115,11 +117,22 @@ class Model:
     sets: dict[str, tuple[str, ...]]
     backend: ModelBackend = field(repr=False)
     sources: dict[str, str] = field(default_factory=dict, repr=False)
+    #: file that declares each process/composite/formula (``source_path`` or an included file)
+    origins: dict[str, str] = field(default_factory=dict, repr=False)
 
     def names(self) -> tuple[str, ...]:
         """Names accepted by :meth:`build_lts`: processes, composites, ltl_property/constraint."""
         extra = tuple(n for n, f in self.formulas.items() if f.kind != "assert")
         return self.processes + self.composites + extra
+
+    def own_names(self) -> tuple[str, ...]:
+        """The :meth:`names` declared in ``source_path`` itself, not in an included file.
+
+        ``iterc check --build`` builds these (and, transitively, whatever they use): an
+        included library may hold fragments that only make sense once the including file
+        declares the sets they mention."""
+        return tuple(n for n in self.names()
+                     if self.origins.get(n, self.source_path) == self.source_path)
 
     def default_name(self) -> str | None:
         """What ``iterc lts SPEC`` builds without a name: the last composite, else the last
@@ -130,9 +143,16 @@ class Model:
             return self.processes[-1]
         return None
 
-    def build_lts(self, name: str) -> tuple[LTS | None, list]:
-        """Build (compose, apply operators, synthesise when asked) the named machine."""
-        return self.backend.build_lts(name)
+    def build_lts(self, name: str, unrealizable: str = "error") -> tuple[LTS | None, list]:
+        """Build (compose, apply operators, synthesise when asked) the named machine.
+
+        An unrealizable ``controller`` composite is an error (E0901, no LTS) by default; with
+        ``unrealizable="plant"`` it gives MTSA's composition instead: the plant the game was
+        played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
+        W0902."""
+        if unrealizable == "error":
+            return self.backend.build_lts(name)
+        return self.backend.build_lts(name, unrealizable=unrealizable)  # type: ignore[call-arg]
 
     def synthesis_problem(self, composite_name: str) -> tuple[SynthesisProblem | None, list]:
         """The resolved synthesis problem of ``controller ||C = (E)~{G}`` (and the other

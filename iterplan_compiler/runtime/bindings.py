@@ -25,8 +25,18 @@ controllable (canonical)             effect -> answer
 anything else                        instantaneous: logged, no answer
 ===================================  ==============================================================
 
-Sensor cell sets come from the map (``GridMap.sensors``).  Users extend or override with
-:meth:`Bindings.bind` (any canonical label) and :meth:`Bindings.sensor` (a predicate over cell ids).
+Sensor cell sets come from the map (``GridMap.sensors``).  The map's sensor *rules* are served
+by :func:`map_rule_bindings` (the executor applies it to every mission, with fresh state):
+
+* ``GridMap.dynamic[X]`` (:class:`~iterplan_compiler.runtime.grid.DynamicSensor`): sensor X
+  answers yes at each of its cells at most ``yes_answers`` times per mission, then no;
+* ``GridMap.derived[X]`` (:class:`~iterplan_compiler.runtime.grid.DerivedSensor`): the action
+  ``neighbours_of`` (e.g. ``store.target``) adds the current cell to a shared set, and sensor X
+  answers yes for cells equal or adjacent (4/8-connectivity) to a stored cell.
+
+Users extend or override with :meth:`Bindings.bind` (any canonical label) and
+:meth:`Bindings.sensor` (a predicate over cell ids); a user's binding of a rule's sensor or
+action takes precedence over the map's rule.
 """
 
 from __future__ import annotations
@@ -40,6 +50,7 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from iterplan_compiler.runtime.executor import MissionContext
+    from iterplan_compiler.runtime.grid import DerivedSensor, DynamicSensor, GridMap
 
 
 def canon(label: str) -> str:
@@ -212,6 +223,80 @@ def _sensor_current(pred: Callable[[int], bool], yes: str, no: str) -> Handler:
         cell = ctx.current_cell()
         return yes if cell is not None and cell >= 0 and pred(cell) else no
     return h
+
+
+# -- map sensor rules -------------------------------------------------------------------------
+
+def dynamic_sensor(cells: np.ndarray, num_cells: int, yes_answers: int) -> Callable[[int], bool]:
+    """Predicate for a :class:`~iterplan_compiler.runtime.grid.DynamicSensor`: yes at a cell of
+    ``cells`` until it has answered yes there ``yes_answers`` times.  The state (answers given)
+    lives in the returned closure, so build one per mission."""
+    mask = np.zeros(num_cells, dtype=bool)
+    mask[np.asarray(cells, dtype=np.int64)] = True
+    given: dict[int, int] = {}
+
+    def pred(cell: int) -> bool:
+        cell = int(cell)
+        if not (0 <= cell < num_cells and mask[cell]) or given.get(cell, 0) >= yes_answers:
+            return False
+        given[cell] = given.get(cell, 0) + 1
+        return True
+    return pred
+
+
+def derived_sensor(grid: GridMap, connectivity: int) -> tuple[Handler, Callable[[int], bool]]:
+    """(store action handler, sensor predicate) for a
+    :class:`~iterplan_compiler.runtime.grid.DerivedSensor`.  Storing marks the stored cell's
+    neighbourhood in a boolean mask over the grid, so a query is O(1) however many cells have
+    been stored (maps have up to 10^6 cells)."""
+    cols, rows = grid.cols, grid.rows
+    near = np.zeros(grid.num_cells, dtype=bool)
+    stored: set[int] = set()
+    offsets = ([(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)] if connectivity == 8
+               else [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)])
+
+    def store(ctx: MissionContext, label: str) -> None:
+        cell = ctx.current_cell()
+        if cell is None or cell < 0:
+            raise BindingError(f"{label}: no current location to store")
+        cell = int(cell)
+        if cell not in stored:
+            stored.add(cell)
+            r, c = divmod(cell, cols)
+            for dr, dc in offsets:
+                if 0 <= r + dr < rows and 0 <= c + dc < cols:
+                    near[(r + dr) * cols + c + dc] = True
+        ctx.note(f"stored {ctx.grid.cell_name(cell)}")
+
+    def pred(cell: int) -> bool:
+        return 0 <= int(cell) < len(near) and bool(near[int(cell)])
+    return store, pred
+
+
+def map_rule_bindings(grid: GridMap, bindings: Bindings | None = None, *,
+                      dynamic: dict[str, DynamicSensor] | None = None,
+                      derived: dict[str, DerivedSensor] | None = None) -> Bindings:
+    """A copy of ``bindings`` plus fresh handlers for the map's sensor rules (default:
+    ``grid.dynamic`` / ``grid.derived``).  A rule whose sensor (or, for a derived sensor, whose
+    action) the caller already bound is left to the caller's binding.  Call once per mission:
+    the returned bindings hold the mission's state (answers given, cells stored)."""
+    out = Bindings(dict(bindings.custom) if bindings else {},
+                   dict(bindings.sensors) if bindings else {})
+    dynamic = grid.dynamic if dynamic is None else dynamic
+    derived = grid.derived if derived is None else derived
+    for name, rule in dynamic.items():
+        if name.lower() in out.sensors:
+            continue
+        if name not in grid.sensors:
+            raise BindingError(f"dynamic sensor {name!r} has no cells in the map")
+        out.sensor(name, dynamic_sensor(grid.sensors[name], grid.num_cells, rule.yes_answers))
+    for name, drule in derived.items():
+        if name.lower() in out.sensors or canon(drule.neighbours_of) in out.custom:
+            continue
+        store, pred = derived_sensor(grid, drule.connectivity)
+        out.bind(drule.neighbours_of, store)
+        out.sensor(name, pred)
+    return out
 
 
 def answers_of(result: Any) -> list[str]:

@@ -37,7 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
-from iterplan_compiler.runtime.bindings import Binding, BindingError, Bindings, answers_of, canon
+from iterplan_compiler.runtime.bindings import (
+    Binding,
+    BindingError,
+    Bindings,
+    answers_of,
+    canon,
+    map_rule_bindings,
+)
 from iterplan_compiler.runtime.controller import Controller, ControllerTable, RefusedEvent
 from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.iterator import Iterator
@@ -281,7 +288,8 @@ class Executor:
         xs, ys = grid.centres()
         p = vehicle.pose()
         self.iterator = Iterator(grid.cells, xs, ys, sorter, Pose(p.x, p.y, p.course))
-        self.bindings = (bindings or Bindings()).resolve(
+        # The map's dynamic/derived sensor rules get fresh state for every mission.
+        self.bindings = map_rule_bindings(grid, bindings).resolve(
             table.controllable, table.uncontrollable, grid.sensors, grid.num_cells)
         self.alphabet = {canon(a): a for a in table.controllable | table.uncontrollable}
         self.no_next = {a for a in table.uncontrollable if canon(a) in ("n.next", "no.next")}

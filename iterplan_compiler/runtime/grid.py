@@ -85,6 +85,25 @@ def points_in_polygon(px: np.ndarray, py: np.ndarray, ring: np.ndarray) -> np.nd
     return inside
 
 
+@dataclass(frozen=True)
+class DynamicSensor:
+    """A sensor whose *yes* answers run out: at each of its cells it answers yes at most
+    ``yes_answers`` times, then no for ever (the observed thing "leaves" -- Find Nemo)."""
+
+    yes_answers: int = 1
+
+
+@dataclass(frozen=True)
+class DerivedSensor:
+    """A sensor computed at run time from a shared set of cells: every execution of the
+    controllable action ``neighbours_of`` (e.g. ``store.target``) adds the current cell to the
+    set; the sensor answers yes for a cell equal or adjacent (``connectivity`` 4 or 8) to a
+    stored cell (Search and Map)."""
+
+    neighbours_of: str = "store.target"
+    connectivity: int = 8
+
+
 @dataclass
 class GridMap:
     """A grid of ``cols x rows`` cells of ``cell_size`` metres; ``cells`` are the locations.
@@ -104,6 +123,12 @@ class GridMap:
     arrival_heading: float = math.pi / 2  # math radians; default: arrive flying north
     sensors: dict[str, np.ndarray] = field(default_factory=dict)
     name: str = "map"
+    #: sensor name -> :class:`DynamicSensor` (map key ``"dynamic"``); the static cells stay in
+    #: :attr:`sensors`, the runtime bindings (:func:`~iterplan_compiler.runtime.bindings.
+    #: map_rule_bindings`) count the answers per mission.
+    dynamic: dict[str, DynamicSensor] = field(default_factory=dict)
+    #: sensor name -> :class:`DerivedSensor` (map key ``"derived"``); no static cells.
+    derived: dict[str, DerivedSensor] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.cols <= 0 or self.rows <= 0 or self.cell_size <= 0:
@@ -337,6 +362,48 @@ def _cell_spec(grid: GridMap, spec, base: Path) -> np.ndarray:
     raise MapError(f"cannot read a cell set from {spec!r}")
 
 
+def parse_sensor_rules(data: dict, static: Iterable[str] = ()) -> tuple[
+        dict[str, DynamicSensor], dict[str, DerivedSensor]]:
+    """The ``"dynamic"`` and ``"derived"`` sections of a map file (see :func:`load_map`).
+
+    ``static`` are the map's static sensor names: a dynamic sensor must be one of them (it
+    limits their yes answers), a derived sensor must not (it has no static cells).  Raises
+    :class:`MapError` with a readable message.
+    """
+    static = set(static)
+    dynamic: dict[str, DynamicSensor] = {}
+    derived: dict[str, DerivedSensor] = {}
+    dyn = data.get("dynamic") or {}
+    der = data.get("derived") or {}
+    if not isinstance(dyn, dict) or not isinstance(der, dict):
+        raise MapError("'dynamic' and 'derived' must be JSON objects keyed by sensor name")
+    for name, spec in dyn.items():
+        if name not in static:
+            raise MapError(f"dynamic sensor {name!r} has no cells in 'sensors' "
+                           f"(map sensors: {', '.join(sorted(static)) or 'none'})")
+        if not isinstance(spec, dict) or set(spec) - {"yes_answers"}:
+            raise MapError(f"dynamic sensor {name!r}: expected {{\"yes_answers\": K}}")
+        k = spec.get("yes_answers", 1)
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            raise MapError(f"dynamic sensor {name!r}: yes_answers must be an integer >= 1, "
+                           f"not {k!r}")
+        dynamic[str(name)] = DynamicSensor(k)
+    for name, spec in der.items():
+        if name in static:
+            raise MapError(f"derived sensor {name!r} also has static cells in 'sensors'")
+        if not isinstance(spec, dict) or set(spec) - {"neighbours_of", "connectivity"}:
+            raise MapError(f"derived sensor {name!r}: expected {{\"neighbours_of\": ACTION, "
+                           f"\"connectivity\": 8}}")
+        action = spec.get("neighbours_of", "store.target")
+        conn = spec.get("connectivity", 8)
+        if not isinstance(action, str) or not action.strip():
+            raise MapError(f"derived sensor {name!r}: neighbours_of must name an action")
+        if conn not in (4, 8) or isinstance(conn, bool):
+            raise MapError(f"derived sensor {name!r}: connectivity must be 4 or 8, not {conn!r}")
+        derived[str(name)] = DerivedSensor(action.strip(), int(conn))
+    return dynamic, derived
+
+
 def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMap:
     """Read a map file (JSON).  Schema (all keys optional except one of the area keys)::
 
@@ -347,11 +414,16 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
          "polygon": [[lon, lat], ...]  /  a GeoJSON Polygon object,
          "home": [lat, lon]  or  {"cell": "A1"},            # default: centre of the first cell
          "altitude": 60, "arrival_heading": 0,              # compass degrees
-         "sensors": {"inP": <cells>, "fire": <cells>}}
+         "sensors": {"inP": <cells>, "fire": <cells>},
+         "dynamic": {"nemo": {"yes_answers": 2}},           # optional, see below
+         "derived": {"adjacent": {"neighbours_of": "store.target", "connectivity": 8}}}
 
     where ``<cells>`` is a list of cell names / ``[col, row]`` pairs, ``{"rect": [c0, r0, c1,
     r1]}``, ``{"random": 0.1, "seed": 1}``, inline GeoJSON, or ``{"file": "x.geojson"}`` /
-    ``"cells.txt"`` relative to the map file.  Raises :class:`MapError` with a readable message.
+    ``"cells.txt"`` relative to the map file.  ``dynamic`` limits a static sensor to
+    ``yes_answers`` yes answers per cell per mission (:class:`DynamicSensor`); ``derived`` declares
+    a sensor answered from the cells stored by an action (:class:`DerivedSensor`).  Raises
+    :class:`MapError` with a readable message.
     """
     base = Path(".")
     if data is None:
@@ -394,6 +466,7 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
             grid.home = grid.centre(int(grid.cells[0]))
         for name, spec in (data.get("sensors") or {}).items():
             grid.set_sensor(str(name), _cell_spec(grid, spec, base))
+        grid.dynamic, grid.derived = parse_sensor_rules(data, grid.sensors)
     except (KeyError, TypeError, IndexError) as exc:
         raise MapError(f"malformed map: {exc!r}") from None
     return grid

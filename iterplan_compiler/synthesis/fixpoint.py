@@ -33,6 +33,14 @@ Optimisations (all sound by monotonicity):
   starts from its value in the previous ``Z`` round (intersected with ``Z``) instead of ``Z``.
 * the ``μY`` loop stops as soon as ``Y == Z`` (it cannot grow beyond ``Z``); the ``νZ`` loop
   stops on ``must_contain``.
+* *chained* ``μY`` (Gauss–Seidel; only without ``keep_iterates``) — inside one ``μY`` round
+  the ``νX`` for assumption ``i`` already uses ``CPre(Y ∪ X_1 ∪ … ∪ X_{i-1})`` in its base
+  instead of waiting for the next round.  Every chained iterate stays below the least
+  fixpoint (each is an operator application to a subset of it) and a round without change is
+  a fixpoint, so ``μY`` is the same set — reached in far fewer rounds (DoorPatrol N=7: 831
+  instead of 3 612 ``νX`` steps, 4.6× less time).  The layered iterates that strategy
+  extraction needs (Bloem et al.) only exist for the round-wise (Jacobi) order, so
+  ``keep_iterates=True`` keeps that order.
 * ``cpre`` results are memoised per argument node for the duration of one call (``CPre(Z)``
   is the first ``νX`` step for every ``(r, i)``; canonical BDD nodes make the cache exact).
   Pass ``memo=False`` if ``cpre`` is not a pure function of its argument.
@@ -103,7 +111,8 @@ def gr1_winning(
         round_y: list[list[Node]] = []
         round_x: list[list[list[Node]]] = []
         for j, g in enumerate(G):
-            y_layers, x_layers, Y = _mu_y(bdd, cpre, A, g & top, Z, prev_x[j], stats)
+            mu_y = _mu_y if keep_iterates else _mu_y_chained
+            y_layers, x_layers, Y = mu_y(bdd, cpre, A, g & top, Z, prev_x[j], stats)
             prev_x[j] = x_layers
             round_y.append(y_layers)
             round_x.append(x_layers)
@@ -166,6 +175,46 @@ def _mu_y(
         if Y == Z:  # cannot grow further
             break
     return layers, x_layers, Y
+
+
+def _mu_y_chained(
+    bdd: Any,
+    cpre: Callable[[Node], Node],
+    A: list[Node],
+    g: Node,
+    Z: Node,
+    recycled: list[list[Node]],
+    stats: dict[str, int],
+) -> tuple[list[Node], list[list[Node]], Node]:
+    """:func:`_mu_y` in Gauss–Seidel order (module doc): ``Y`` grows after every ``νX``.
+
+    Returns ``([], x_rounds, Y)``: the per-round ``νX`` values (for recycling in the next ``Z``
+    round — chained iterates are monotone in ``Z`` too), no layers.
+    """
+    reach_goal = g & cpre(Z) & Z
+    not_a = [~a & Z for a in A]
+    Y = bdd.false
+    x_rounds: list[list[Node]] = []
+    r = 0
+    while True:
+        stats["y"] += 1
+        y_round_start = Y
+        xs: list[Node] = []
+        for i in range(len(A)):
+            base = reach_goal | (cpre(Y) & Z)
+            start = Z
+            if r < len(recycled) and i < len(recycled[r]):
+                start = recycled[r][i] & Z
+            X = _nu_x(cpre, base, not_a[i], start | base, stats)
+            xs.append(X)
+            Y = Y | X
+            if Y == Z:  # cannot grow further
+                x_rounds.append(xs)
+                return [], x_rounds, Y
+        x_rounds.append(xs)
+        if Y == y_round_start:
+            return [], x_rounds, Y
+        r += 1
 
 
 def _nu_x(

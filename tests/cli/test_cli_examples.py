@@ -60,6 +60,19 @@ def test_verify_prints_counterexample_from_the_initial_state(capsys):
     assert "Violation of LTL property HasNextInfinitelyOften" in res.out
     trace = res.out.split("Trace to property violation in FirePatrolSystem:\n", 1)[1]
     assert trace.splitlines()[0].strip() == "takeoff"
+    assert "note: HasNextInfinitelyOften has no temporal operator" in res.out
+
+
+def test_verify_liveness_of_the_synthesised_system(tmp_path, capsys):
+    # The same goal written as []<> holds on the controlled system (fair runs), and the spec's
+    # include of the stdlib still resolves from a copy outside examples/.
+    spec = tmp_path / "fire_gf.lts"
+    spec.write_text(FIRE.read_text(encoding="utf-8") + "\nassert GF = []<>HasNext\n",
+                    encoding="utf-8")
+    res = run_cli(capsys, "verify", spec, "--assert", "GF", "--on", "FirePatrolSystem")
+    assert_no_crash(res)
+    assert res.code == 0, res.err
+    assert "assert GF on FirePatrolSystem: No LTL Property violations detected." in res.out
 
 
 @pytest.fixture(scope="module")
@@ -145,3 +158,15 @@ def test_dot_default_and_named(capsys):
     res = run_cli(capsys, "dot", GOLDEN_SPEC, "OnlyPatrolled")
     assert res.code == 0, res.err
     assert "ERROR [shape=box" in res.out and '-> ERROR [label="go.next"' in res.out
+
+
+@dot_missing
+def test_dot_warns_before_a_long_layout(tmp_path, capsys, monkeypatch):
+    from iterplan_compiler.commands import dot as dot_command
+
+    monkeypatch.setattr(dot_command, "LARGE_DRAWING", 5)
+    res = run_cli(capsys, "dot", GOLDEN_SPEC, "-o", tmp_path / "p.svg")
+    assert res.code == 0, res.err
+    assert "note: 'Patrol' has" in res.err and "may take a long time" in res.err
+    res = run_cli(capsys, "dot", GOLDEN_SPEC, "-o", tmp_path / "p.dot")  # no layout, no note
+    assert res.code == 0 and "note:" not in res.err

@@ -45,9 +45,12 @@ def test_unrealizable_explained(tmp_path, capsys):
     assert "UNREALIZABLE" in out and "guarantee #1" in out
 
 
-def test_missing_file_is_usage_error(tmp_path):
+def test_missing_file_is_a_diagnostic(tmp_path, capsys):
+    # commands/synth.py: an unreadable SPEC is an input problem (diagnostic, exit code 1)
     from iterplan_compiler.commands import synth
 
     parser = argparse.ArgumentParser()
     synth.add_arguments(parser)
-    assert synth.run(parser.parse_args([str(tmp_path / "nope.lts")])) == 2
+    assert synth.run(parser.parse_args([str(tmp_path / "nope.lts")])) == 1
+    captured = capsys.readouterr()
+    assert "nope.lts" in captured.out + captured.err
