@@ -84,8 +84,8 @@ def sweep_chunks(chunks: list[int], radius: float, n: int = 700_000) -> None:
     start = Pose(float(xs.mean()) + 10, float(ys.mean()) - 20, 0.3)
     for parallel in (False, True):
         for ch in chunks:
-            wall, cpu = best_of(lambda ch=ch: dubins_lengths(
-                start, xs32, ys32, math.pi / 2, radius, parallel=parallel, chunk=ch), 7)
+            wall, cpu = best_of(lambda ch=ch, par=parallel: dubins_lengths(
+                start, xs32, ys32, math.pi / 2, radius, parallel=par, chunk=ch), 7)
             row(n, f"chunk {ch} {'par' if parallel else 'fixed'}", wall, cpu)
 
 

@@ -1,7 +1,7 @@
 """Synthesis timing: a scalable patrol-with-doors family and (when the front-end is present)
 the conformance specs.  Prints phase times, game sizes and BDD sizes per variable order.
 
-    python benchmarks/synthesis_bench.py [--max-n 7] [--explicit-max 4]
+    python benchmarks/synthesis_bench.py [--max-n 7] [--explicit-max 4] [--min-n 2]
         [--conformance ../shared/conformance/mtsa [--patrol-max 5] [--limit 120]]
 
 Family ``DoorPatrol_N``: a robot on a ring of N rooms (controllable ``go.i`` to an adjacent
@@ -55,25 +55,31 @@ def _row(label: str, r) -> str:
     st = r.stats
     times = " ".join(f"{k[2:]}={st[k]:.3f}" for k in st if k.startswith("t_"))
     extra = f" |T|={st['trans_bdd_nodes']}" if "trans_bdd_nodes" in st else ""
+    if "fixpoint_iterations" in st:
+        extra += f" nuX-steps={st['fixpoint_iterations'].get('x')}"
     return (f"{label:34s} {'R' if r.realizable else 'U'} game={st.get('game_states')}"
             f" ctrl={st.get('controller_states', '-')}{extra}  {times}")
 
 
-def bench_family(max_n: int, explicit_max: int) -> None:
+def _timed(label: str, problem: SynthesisProblem, **kw) -> None:
+    """One synthesis run: wall and CPU seconds (CPU is the figure to compare on a busy box)."""
+    t, c = time.perf_counter(), time.process_time()
+    r = synthesize(problem, **kw)
+    print(_row(label, r) + f"  total={time.perf_counter() - t:.3f}"
+          f" cpu={time.process_time() - c:.3f}")
+
+
+def bench_family(max_n: int, explicit_max: int, min_n: int = 2) -> None:
     print("== DoorPatrol_N (symbolic, per variable order; explicit for small N)")
-    for n in range(2, max_n + 1):
+    for n in range(min_n, max_n + 1):
         p = door_patrol(n)
         # the poorer orders only while they stay cheap (they are here to be compared)
         orders = ("clustered",) + (("action_first", "action_last") if n <= 6 else ()) \
             + (("blocked",) if n <= 3 else ())
         for order in orders:
-            t = time.perf_counter()
-            r = synthesize(p, order=order)
-            print(_row(f"N={n} symbolic/{order}", r) + f"  total={time.perf_counter() - t:.3f}")
+            _timed(f"N={n} symbolic/{order}", p, order=order)
         if n <= explicit_max:
-            t = time.perf_counter()
-            r = synthesize(p, solver="explicit")
-            print(_row(f"N={n} explicit", r) + f"  total={time.perf_counter() - t:.3f}")
+            _timed(f"N={n} explicit", p, solver="explicit")
         sys.stdout.flush()
 
 
@@ -137,24 +143,23 @@ def bench_patrol(root: Path, ns: list[int]) -> None:
             continue
         sizes = "+".join(str(c.num_states) for c in problem.plant)
         for solver in ("symbolic", "explicit"):
-            t = time.perf_counter()
-            r = synthesize(problem, solver=solver, explain=False)
-            print(_row(f"N={n} {solver} (plant {sizes})", r)
-                  + f"  total={time.perf_counter() - t:.3f}")
+            _timed(f"N={n} {solver} (plant {sizes})", problem, solver=solver, explain=False)
         sys.stdout.flush()
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--max-n", type=int, default=6)
+    ap.add_argument("--min-n", type=int, default=2)
     ap.add_argument("--explicit-max", type=int, default=4)
     ap.add_argument("--conformance", type=Path, default=None)
     ap.add_argument("--limit", type=float, default=120.0)
     ap.add_argument("--patrol-max", type=int, default=5)
+    ap.add_argument("--patrol-min", type=int, default=2)
     args = ap.parse_args()
-    bench_family(args.max_n, args.explicit_max)
+    bench_family(args.max_n, args.explicit_max, args.min_n)
     if args.conformance:
-        bench_patrol(args.conformance, list(range(2, args.patrol_max + 1)))
+        bench_patrol(args.conformance, list(range(args.patrol_min, args.patrol_max + 1)))
         bench_conformance(args.conformance, args.limit)
 
 

@@ -36,19 +36,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from iterplan_compiler.frontend import load, parse_file
+    from iterplan_compiler.frontend import load_with_sources
 
     if getattr(args, "print_fsp", False):
         return _print(args.spec)
-    model, diags = load(args.spec)
+    model, diags, sources = load_with_sources(args.spec)
     if model is not None and args.build:
         for name in model.own_names():
             _, ds = model.build_lts(name)
             diags += [d for d in ds if d not in diags]
     shown = [d for d in diags if d.is_error or not args.quiet]
     if shown:
-        sources = model.sources if model is not None else parse_file(args.spec)[2]
-        print(render(shown, sources), file=sys.stderr)
+        print(render(shown, model.sources if model is not None else sources),
+              file=sys.stderr)
     if has_errors(diags):
         n = sum(1 for d in diags if d.is_error)
         print(f"{args.spec}: {n} error(s)", file=sys.stderr)

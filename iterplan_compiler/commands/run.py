@@ -29,8 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed for the random sorter and sim")
     parser.add_argument("--ideal-compute", action="store_true",
                         help="do not charge planning compute time to the simulated clock")
-    parser.add_argument("--passes", type=int, default=1,
-                        help="stop after this many complete iterator passes (0: no limit)")
+    parser.add_argument("--passes", type=int, default=None,
+                        help="stop after this many complete iterator passes (0: no limit; "
+                             "default 1, or 0 with --until)")
+    parser.add_argument("--until", default=None, metavar="LABEL[:K]",
+                        help="end the mission (successfully) when the controller's event LABEL "
+                             "occurs for the K-th time (default K=1), e.g. `--until restart` "
+                             "or `--until n.next:2`; a controllable LABEL ends it before the "
+                             "action runs")
     parser.add_argument("--max-time", type=float, default=4 * 3600.0,
                         help="mission time limit in seconds")
     parser.add_argument("--planner", choices=("course", "carrot"), default=None,
@@ -65,6 +71,17 @@ def run(args: argparse.Namespace) -> int:
         grid = load_map(args.map)
     except MapError as exc:
         return err(f"{args.map}: {exc}")
+    until = None
+    if args.until is not None:
+        until = _parse_until(args.until)
+        if until is None:
+            print(f"iterc run: --until expects LABEL or LABEL:K (K >= 1), not {args.until!r}",
+                  file=sys.stderr)
+            return 2
+    passes = args.passes if args.passes is not None else (0 if until else 1)
+    if passes < 0:
+        print("iterc run: --passes must be >= 0", file=sys.stderr)
+        return 2
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
 
     vehicle = None
@@ -93,9 +110,10 @@ def run(args: argparse.Namespace) -> int:
                 return err(str(exc))
             mode = args.planner or "carrot"
         cfg = RunConfig(sorter=args.sorter, seed=args.seed, ideal_compute=args.ideal_compute,
-                        passes=args.passes, max_time=args.max_time, planner_mode=mode,
+                        passes=passes, max_time=args.max_time, planner_mode=mode,
                         wind=wind_margin,
-                        progress=progress, progress_every=60.0)
+                        progress=progress, progress_every=60.0,
+                        on_event=_until_hook(*until) if until else None)
         try:
             result = Executor(table, grid, vehicle, config=cfg).run()
         except BindingError as exc:
@@ -120,3 +138,34 @@ def run(args: argparse.Namespace) -> int:
     print(f"  visited {s['arrivals']} cells, {s['photos']} photos, {s['steps']} controller steps, "
           f"compute {s['compute_s']:.3f} s; outputs in {out}")
     return 0 if result.ok else 1
+
+
+def _parse_until(text: str) -> tuple[str, int] | None:
+    """``LABEL`` or ``LABEL:K`` -> (canonical label, K), or None if malformed."""
+    from iterplan_compiler.runtime.bindings import canon
+
+    label, _, count = text.partition(":")
+    label = canon(label)
+    if not label:
+        return None
+    if not count:
+        return label, 1
+    try:
+        k = int(count)
+    except ValueError:
+        return None
+    return (label, k) if k >= 1 else None
+
+
+def _until_hook(label: str, k: int):
+    """Executor ``on_event`` hook: True (end the mission) at the k-th event ``label``."""
+    from iterplan_compiler.runtime.bindings import canon
+
+    seen = [0]
+
+    def hook(kind: str, event: str) -> bool:
+        if canon(event) != label:
+            return False
+        seen[0] += 1
+        return seen[0] >= k
+    return hook

@@ -28,9 +28,12 @@ def parse_file(path: str, text: str | None = None):
             return None, [error("E0800", f"cannot read {path}: {e.strerror or e}",
                                 Span(path, 0, 0))], {}
     sources = {path: text}
-    spec, ds = parse_text(text, path)
-    diags.extend(ds)
-    spec = expand_includes(spec, sources, diags)
+    try:
+        spec, ds = parse_text(text, path)
+        diags.extend(ds)
+        spec = expand_includes(spec, sources, diags)
+    except RecursionError:  # the syntax-tree walk is recursive (see too_deep)
+        return None, [too_deep(path)], sources
     return spec, diags, sources
 
 
@@ -51,8 +54,19 @@ def load_with_sources(path: str, text: str | None = None):
     ``None`` (syntax errors) without parsing the file twice."""
     from iterplan_compiler.frontend.elaborate import elaborate
 
-    spec, diags, sources = parse_file(path, text)
-    if spec is None or has_errors(diags):
-        return None, diags, sources
-    model, ds = elaborate(spec, sources[path], sources)
+    sources: dict[str, str] = {}
+    try:
+        spec, diags, sources = parse_file(path, text)
+        if spec is None or has_errors(diags):
+            return None, diags, sources
+        model, ds = elaborate(spec, sources[path], sources)
+    except RecursionError:
+        # the tree walks are recursive; absurdly deep nesting is bad input, not a crash
+        return None, [too_deep(path)], sources
     return model, diags + ds, sources
+
+
+def too_deep(path: str) -> Diagnostic:
+    """E0005: the input nests deeper than the front-end's recursive walks allow."""
+    return error("E0005", "expression or process nested too deeply to process (Python "
+                 "recursion limit); split it into named parts", Span(path, 0, 0))

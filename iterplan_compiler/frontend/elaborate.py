@@ -365,7 +365,13 @@ class Elaborator(ModelBackend):
     def build_lts(self, name: str, unrealizable: str = "error"
                   ) -> tuple[LTS | None, list[Diagnostic]]:
         """See :meth:`Model.build_lts`."""
-        lts, diags = self._build_top(name)
+        try:
+            lts, diags = self._build_top(name)
+        except RecursionError:
+            from iterplan_compiler.frontend import too_deep
+
+            self.building.clear()
+            return None, [too_deep(self.spec.path)]
         if unrealizable == "plant" and lts is None and name in self.unrealizable:
             plant, ds = self.unrealizable_plant(name)
             if plant is not None:
@@ -784,6 +790,11 @@ class Elaborator(ModelBackend):
         except EvalError as e:
             diags.append(e.diag)
             return None, diags
+        except RecursionError:
+            from iterplan_compiler.frontend import too_deep
+
+            self.building.clear()
+            return None, [*diags, too_deep(self.spec.path)]
 
     def _problem(self, name: str, diags: list[Diagnostic]) -> SynthesisProblem | None:
         d = self.composites.get(name)

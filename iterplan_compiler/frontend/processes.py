@@ -192,20 +192,40 @@ class _Builder:
                 self.chain(s, c, 0, e0)
 
     def chain(self, s: int, c: S.Choice, i: int, env: Env) -> None:
-        for action, e2 in expand_label_env(c.labels[i], env):
+        """The prefix chain ``l_i -> ... -> target`` of choice ``c`` from state ``s``.
+
+        A depth-first walk with an explicit stack (a 1000-action sequence must not hit
+        Python's recursion limit); it numbers states and emits transitions in the same order
+        as the obvious recursive version: a state is created when first reached, the move
+        into it is recorded once the chain behind it is done."""
+        Frame = list  # [state, index, label iterator, pending transition or None]
+        stack: list[Frame] = [[s, i, iter(expand_label_env(c.labels[i], env)), None]]
+        while stack:
+            frame = stack[-1]
+            if frame[3] is not None:
+                self.trans.append(frame[3])
+                frame[3] = None
+            src, k, labels = frame[0], frame[1], frame[2]
+            item = next(labels, None)
+            if item is None:
+                stack.pop()
+                continue
+            action, e2 = item
             if action == TAU or action.startswith("tau."):
                 raise EvalError(error("E0306", "'tau' cannot be used as an action label",
-                                      c.labels[i].span))
+                                      c.labels[k].span))
             self.alphabet.add(action)
-            if i + 1 < len(c.labels):
-                ck = (id(c), i + 1, e2.key())
+            if k + 1 < len(c.labels):
+                ck = (id(c), k + 1, e2.key())
                 if ck not in self.cache:
                     t = self.new_state()
                     self.cache[ck] = t
-                    self.chain(t, c, i + 1, e2)
-                self.trans.append((s, action, self.cache[ck]))
+                    frame[3] = (src, action, t)
+                    stack.append([t, k + 1, iter(expand_label_env(c.labels[k + 1], e2)), None])
+                    continue
+                self.trans.append((src, action, self.cache[ck]))
             else:
-                self.trans.append((s, action, self.state(c.target, e2)))
+                self.trans.append((src, action, self.state(c.target, e2)))
 
     def splice(self, items: list[S.StateRef], env: Env, cont: S.StateRef | None,
                start: int | None = None) -> int:

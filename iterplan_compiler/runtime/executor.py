@@ -387,7 +387,8 @@ class Executor:
         self.vehicle.advance(dt)
         self._record_track()
         for pe in self.planner.update():
-            self.log_entry("p", f"{pe.kind} {pe.detail}", self.ctx.target_cell or -1)
+            self.log_entry("p", f"{pe.kind} {pe.detail}",
+                           -1 if self.ctx.target_cell is None else self.ctx.target_cell)
             if pe.kind == "arrived":
                 cell = self.ctx.target_cell
                 self.ctx.last_arrival = cell

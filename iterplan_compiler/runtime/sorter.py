@@ -14,10 +14,14 @@ the pose the UAV *will have* when ``arrived`` fires.  Strategies (paper §V "Run
 ``random``
     A fresh seeded random permutation on every re-sort.
 
-A sorter maps ``(x, y, pose)`` to priority keys (smaller = offered earlier).  The distance kernel
-is vectorised NumPy in float32, processed in cache-sized chunks, with no per-element sin/cos:
-targets are rotated into the start frame once, and each CSC word needs one ``arctan2`` (the inner
-tangents' extra angle is applied by rotating the centre-to-centre vector, not by a second atan2).
+A sorter maps ``(x, y, pose)`` to priority keys (smaller = offered earlier); ``best`` gives just
+the first location and :func:`select_smallest` the first ``k`` in order without a full sort.
+The distance kernel (:func:`dubins_lengths`) is vectorised NumPy in float32 over chunks, every
+step writing into a reused workspace (no temporaries), with no per-element sin/cos: targets are
+rotated into the start frame once; the outer words (LSL, RSR) need no angle at all, the inner
+words (LSR, RSL) one polynomial half-angle ``atan`` each; the "parallel" variant shares all of
+the geometry between the two arrival directions.  About 120 NumPy passes per chunk for a fixed
+arrival heading, 220 for parallel; ``benchmarks/sorter_bench.py`` prints the throughput.
 """
 
 from __future__ import annotations
@@ -33,6 +37,8 @@ TWO_PI = 2.0 * math.pi
 # into L3 but still measured best here (8k: 1.4x, 4k: 2x slower).  Re-tune with
 # ``python benchmarks/sorter_bench.py --chunks 8192,16384,32768,65536``.
 CHUNK = 32768
+
+
 @dataclass(frozen=True)
 class Pose:
     """Planar pose: ENU metres and math heading (radians, CCW from east)."""
@@ -284,10 +290,10 @@ def select_smallest(keys: np.ndarray, k: int) -> np.ndarray:
 
     A threshold is read off a strided sample (a partition of <= 64k elements), one compare +
     ``flatnonzero`` pass collects the candidates at or below it (every key below the k-th
-    smallest and all its ties), and only those are sorted: ~7 ms for k = 4096 of 10 M keys,
-    against ~60 ms for ``argpartition`` (+ ~90 ms to apply it to an index queue).  If the sample
-    under-estimates (fewer than ``k`` candidates), falls back to ``argpartition`` for the
-    threshold.  For callers that want only the best next location (``k = 1``) see
+    smallest and all its ties), and only those are sorted: ~6 ms for k = 4096 of 10 M keys,
+    against ~45-60 ms for ``argpartition`` (+ ~90 ms to apply it to an index queue).  When
+    ``k`` is over 1/64 of ``keys``, or the sample under-estimates (fewer than ``k``
+    candidates), the threshold comes from ``argpartition`` instead.  For callers that want only the best next location (``k = 1``) see
     :meth:`Sorter.best`.
     """
     keys = np.asarray(keys)
@@ -295,11 +301,13 @@ def select_smallest(keys: np.ndarray, k: int) -> np.ndarray:
     k = min(int(k), n)
     if k <= 0:
         return np.zeros(0, dtype=np.int64)
-    if n <= 8 * k + 1024:
+    if n <= 1024:
         return np.argsort(keys, kind="stable")[:k]
-    sample = keys[::max(1, n // 65536)]
-    j = min(len(sample) - 1, int(2 * k * len(sample) / n) + 8)
-    cand = np.flatnonzero(keys <= np.partition(sample, j)[j])
+    cand = np.zeros(0, dtype=np.int64)
+    if n > 64 * k:          # else the candidates would be a large share of keys anyway
+        sample = keys[::max(1, n // 65536)]
+        j = min(len(sample) - 1, int(2 * k * len(sample) / n) + 8)
+        cand = np.flatnonzero(keys <= np.partition(sample, j)[j])
     if len(cand) < k:
         kth = keys[np.argpartition(keys, k - 1)[k - 1]]
         cand = np.flatnonzero(keys <= kth)

@@ -121,6 +121,27 @@ class BitVec:
         return u
 
 
+def value_cubes(bdd: Manager, vec: BitVec, n: int) -> list[Node]:
+    """``[vec.eq(bdd, v) for v in range(n)]``, computed with shared prefixes.
+
+    Cubes of the values that agree on their low ``k`` bits share the conjunction of those
+    literals, so all ``n`` cubes cost about ``2·2^width`` conjunctions instead of
+    ``n·width`` — the difference matters when encoding a machine with 10^4+ states.
+    """
+    if n <= 0:
+        return []
+    if n > (1 << vec.width):
+        raise ValueError(f"{n} values do not fit in {vec.width} bits")
+    layer = [bdd.true]  # layer[v] for v < 2^k: conjunction of the low k bits of v
+    for k, name in enumerate(vec.names):
+        pos = bdd.var(name)
+        neg = ~pos
+        # value v = low + (bit << k); keep only prefixes some value below n still uses
+        layer = [layer[v & ((1 << k) - 1)] & (pos if (v >> k) & 1 else neg)
+                 for v in range(min(n, 1 << (k + 1)))]
+    return layer[:n]
+
+
 def declare_interleaved(bdd: Manager, prefix: str, width: int) -> tuple[BitVec, BitVec]:
     """Declare ``prefix_k`` and ``prefix_k'`` for k < width, interleaved; return (cur, nxt)."""
     cur = tuple(f"{prefix}_{k}" for k in range(width))

@@ -196,9 +196,9 @@ def _mu_y_chained(
     Y = bdd.false
     x_rounds: list[list[Node]] = []
     r = 0
+    quiet = 0  # consecutive νX steps that did not grow Y
     while True:
         stats["y"] += 1
-        y_round_start = Y
         xs: list[Node] = []
         for i in range(len(A)):
             base = reach_goal | (cpre(Y) & Z)
@@ -207,13 +207,16 @@ def _mu_y_chained(
                 start = recycled[r][i] & Z
             X = _nu_x(cpre, base, not_a[i], start | base, stats)
             xs.append(X)
-            Y = Y | X
-            if Y == Z:  # cannot grow further
+            y_new = Y | X
+            quiet = quiet + 1 if y_new == Y else 0
+            Y = y_new
+            # Y == Z cannot grow further; after len(A) quiet steps every νX has been
+            # evaluated against the current Y and stayed inside it: Y is the fixpoint
+            # (no need to finish the round or to repeat a whole confirming round).
+            if Y == Z or quiet == len(A):
                 x_rounds.append(xs)
                 return [], x_rounds, Y
         x_rounds.append(xs)
-        if Y == y_round_start:
-            return [], x_rounds, Y
         r += 1
 
 

@@ -190,3 +190,24 @@ def test_controller_composite_is_synthesised_once(tmp_path, monkeypatch):
         lts, ds = model.build_lts(name)
         assert lts is not None, ds
     assert calls == ["C"]
+
+
+# ---------------------------------------------------------------- deep nesting
+def test_long_action_sequence_builds_without_recursion(tmp_path):
+    text = "A = (" + " -> ".join(f"a{i}" for i in range(3000)) + " -> A).\n"
+    model, diags = load(str(_write(tmp_path, "long.lts", text)))
+    assert model is not None and not diags
+    lts, ds = model.build_lts("A")
+    assert lts is not None and not ds
+    assert lts.num_states == 3000 and lts.num_transitions == 3000
+    # state i is reached by a_{i-1}: the numbering follows the sequence
+    assert (0, "a0", 1) in lts.transitions and (2999, "a2999", 0) in lts.transitions
+
+
+@pytest.mark.parametrize("formula", ["!" * 3000 + "F", "(F && " * 800 + "F" + ")" * 800],
+                         ids=["not", "and"])
+def test_absurdly_nested_formula_is_a_diagnostic(formula, tmp_path, capsys):
+    p = _write(tmp_path, "deep.lts", f"fluent F = <a, b>\nA = (a -> b -> A).\nassert P = {formula}\n")
+    code, _, err = _run(capsys, "check", "--build", p)
+    assert code == 1
+    assert [(e["file"], e["code"]) for e in _errors(err)] == [(str(p), "E0005")]

@@ -60,6 +60,9 @@ def test_symbolic_and_explicit_agree(prob):
     reach = g.reachable()
     goals = [gj | g.failures for gj in g.guarantees]
     fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach)
+    # the chained (Gauss–Seidel) μY and the layered (Jacobi) one reach the same fixpoint
+    layered = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach, keep_iterates=True)
+    assert layered.winning == fp.winning
     W = fp.winning & reach
     for s, tup in enumerate(game.tuples):
         if tup is None:
