@@ -91,6 +91,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return EXIT_OK
+    except RecursionError:
+        # Last line of defence: every stage turns deep nesting into a diagnostic, but a new
+        # recursive path must still not show the user a traceback for their input.
+        print("iterc: error: the input is nested too deeply to process", file=sys.stderr)
+        return EXIT_FAIL
     except Exception:  # a compiler bug: never show a bare traceback as if it were the user's fault
         print("iterc: internal error (this is a bug in iterc, please report it):",
               file=sys.stderr)

@@ -30,3 +30,16 @@ def test_runtime_imports_without_lark_or_dd():
         "assert not bad, bad\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_recursion_error_is_reported_as_an_input_error(monkeypatch, capsys):
+    """A RecursionError escaping a command is the user's deep input, not an internal bug."""
+    from iterplan_compiler import cli
+    from iterplan_compiler.commands import check
+
+    def deep(_args):
+        raise RecursionError("maximum recursion depth exceeded")
+
+    monkeypatch.setattr(check, "run", deep)
+    assert cli.main(["check", "x.lts"]) == cli.EXIT_FAIL
+    assert "nested too deeply" in capsys.readouterr().err

@@ -3,7 +3,7 @@
 A graph is given implicitly by initial nodes and a successor function returning
 ``(label, target, mask)`` triples; ``full_mask`` is the union of the acceptance bits.  An SCC is
 *accepting* iff it has an internal edge and its internal edges together carry every bit of
-``full_mask``.  Tarjan's algorithm is written iteratively (product graphs can be deep).
+``full_mask``.  SCCs come from networkx (iterative, so product graphs may be deep).
 """
 
 from __future__ import annotations
@@ -11,6 +11,8 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
+
+import networkx as nx
 
 Edge = tuple[str, Hashable, int]
 Successors = Callable[[Hashable], Iterable[Edge]]
@@ -27,7 +29,7 @@ class Analysis:
     initial: list[Hashable]
     adj: dict[Hashable, list[Edge]]
     scc_of: dict[Hashable, int]
-    sccs: list[list[Hashable]]  # in Tarjan emission order: successors' SCCs come first
+    sccs: list[list[Hashable]]  # reverse topological: successors' SCCs come first
     accepting: list[bool]
     live: set[Hashable]  # nodes from which an accepting SCC is reachable
 
@@ -39,63 +41,43 @@ def analyse(
     *,
     max_nodes: int | None = None,
 ) -> Analysis:
-    """Explore everything reachable from ``initial`` and classify SCCs."""
+    """Explore everything reachable from ``initial`` and classify SCCs.
+
+    Exploration is breadth-first (raising :class:`StateLimitExceeded` past ``max_nodes``
+    expanded nodes); the SCC decomposition and its topological order come from networkx's
+    iterative algorithms (no recursion limit on deep product graphs).  Orders are made
+    deterministic through the breadth-first discovery index, never through hashing, so
+    counterexamples do not depend on ``PYTHONHASHSEED``.
+    """
     initial = list(dict.fromkeys(initial))
     adj: dict[Hashable, list[Edge]] = {}
-    index: dict[Hashable, int] = {}
-    low: dict[Hashable, int] = {}
-    on_stack: set[Hashable] = set()
-    stack: list[Hashable] = []
-    scc_of: dict[Hashable, int] = {}
+    order: dict[Hashable, int] = {v: i for i, v in enumerate(initial)}
+    queue: deque[Hashable] = deque(initial)
+    while queue:
+        v = queue.popleft()
+        es = list(successors(v))
+        adj[v] = es
+        if max_nodes is not None and len(adj) > max_nodes:
+            raise StateLimitExceeded(max_nodes)
+        for _, w, _ in es:
+            if w not in order:
+                order[w] = len(order)
+                queue.append(w)
+
+    graph = nx.DiGraph()
+    graph.add_nodes_from(adj)
+    graph.add_edges_from((v, w) for v, es in adj.items() for _, w, _ in es)
+    dag = nx.condensation(graph)
+    first = {c: min(order[v] for v in dag.nodes[c]["members"]) for c in dag}
+    # Reverse topological order: every SCC reachable from a component is classified first.
+    topo = list(nx.lexicographical_topological_sort(dag, key=lambda c: first[c]))
     sccs: list[list[Hashable]] = []
-    counter = 0
-
-    def edges(v: Hashable) -> list[Edge]:
-        e = adj.get(v)
-        if e is None:
-            e = list(successors(v))
-            adj[v] = e
-            if max_nodes is not None and len(adj) > max_nodes:
-                raise StateLimitExceeded(max_nodes)
-        return e
-
-    for root in initial:
-        if root in index:
-            continue
-        work = [(root, 0)]
-        index[root] = low[root] = counter
-        counter += 1
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            v, i = work[-1]
-            es = edges(v)
-            if i < len(es):
-                work[-1] = (v, i + 1)
-                w = es[i][1]
-                if w not in index:
-                    index[w] = low[w] = counter
-                    counter += 1
-                    stack.append(w)
-                    on_stack.add(w)
-                    work.append((w, 0))
-                elif w in on_stack:
-                    low[v] = min(low[v], index[w])
-                continue
-            work.pop()
-            if work:
-                u = work[-1][0]
-                low[u] = min(low[u], low[v])
-            if low[v] == index[v]:
-                comp = []
-                while True:
-                    w = stack.pop()
-                    on_stack.discard(w)
-                    scc_of[w] = len(sccs)
-                    comp.append(w)
-                    if w == v:
-                        break
-                sccs.append(comp)
+    scc_of: dict[Hashable, int] = {}
+    for c in reversed(topo):
+        comp = sorted(dag.nodes[c]["members"], key=order.__getitem__)
+        for v in comp:
+            scc_of[v] = len(sccs)
+        sccs.append(comp)
 
     accepting = []
     live: set[Hashable] = set()
@@ -112,7 +94,6 @@ def analyse(
                     exits_live = True
         acc = internal and (mask & full_mask) == full_mask
         accepting.append(acc)
-        # Emission order guarantees every SCC reachable from ``comp`` is classified already.
         if acc or exits_live:
             live.update(comp)
     return Analysis(initial, adj, scc_of, sccs, accepting, live)

@@ -100,3 +100,23 @@ def test_render_dot_text_and_bad_suffix(tmp_path, monkeypatch):
     monkeypatch.setattr("iterplan_compiler.backends.graphviz.dot_binary", lambda: None)
     with pytest.raises(GraphvizError, match="needs Graphviz"):
         render(text, tmp_path / "t.svg")
+
+
+def _ring(n_states: int, labels_per_state: int):
+    # Distinct targets so no two transitions share an edge: n_states * labels_per_state edges.
+    trans = [(s, f"a{k}", (s + k + 1) % n_states) for s in range(n_states)
+             for k in range(labels_per_state)]
+    return make_lts("Ring", n_states, trans)
+
+
+def test_big_drawings_get_layout_hints():
+    from iterplan_compiler.backends import graphviz
+
+    small = to_dot(_ring(10, 3))                                   # 30 edges
+    assert "nslimit" not in small and "splines" not in small
+    medium = to_dot(_ring(40, 5))                                  # 200 edges
+    assert "nslimit=0.2;" in medium and "splines" not in medium
+    big = to_dot(_ring(80, 5))                                     # 400 edges
+    assert "nslimit=0.2;" in big and "splines=line;" in big
+    assert graphviz.FAST_LAYOUT_EDGES < 200 < graphviz.STRAIGHT_EDGES < 400
+    pydot.graph_from_dot_data(big)  # still valid DOT
