@@ -82,9 +82,10 @@ def _sources(model: Any, path: str | Path, text: str | None) -> dict[str, str]:
         src = text
     if src is None:
         try:
-            # Same decoding as the front-end (bad bytes become U+FFFD, which the lexer then
-            # reports with a position) so the caret lines up and non-UTF-8 input never raises.
-            src = Path(path).read_text(encoding="utf-8", errors="replace")
+            # Decoded like the front-end (bad bytes become U+FFFD, which the lexer then reports
+            # with a position) so non-UTF-8 input never raises; a UTF-8 byte-order mark (written
+            # by some Windows editors) is dropped so it does not shift line 1's caret.
+            src = Path(path).read_text(encoding="utf-8-sig", errors="replace")
         except OSError:
             return {}
     key = str(getattr(model, "source_path", None) or path)

@@ -46,7 +46,7 @@ def _sources(args: argparse.Namespace, model) -> dict[str, str]:
     if model is not None and getattr(model, "source_text", None) is not None:
         sources[str(model.source_path)] = model.source_text
     try:
-        text = Path(args.spec).read_text(encoding="utf-8", errors="replace")
+        text = Path(args.spec).read_text(encoding="utf-8-sig", errors="replace")
     except OSError:
         return sources
     sources.setdefault(args.spec, text)

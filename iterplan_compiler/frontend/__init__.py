@@ -23,7 +23,7 @@ def parse_file(path: str, text: str | None = None):
     diags: list[Diagnostic] = []
     if text is None:
         try:
-            text = Path(path).read_text(encoding="utf-8", errors="replace")
+            text = Path(path).read_text(encoding="utf-8-sig", errors="replace")
         except OSError as e:
             return None, [error("E0800", f"cannot read {path}: {e.strerror or e}",
                                 Span(path, 0, 0))], {}

@@ -203,12 +203,24 @@ def evaluate(e: S.Expr, env: Env, depth: int = 0) -> Value:
     raise fail("E0202", "unsupported expression", getattr(e, "span", Span("<expr>", 0, 0)))
 
 
+# A range is expanded into one label per value; past this size elaboration would run for
+# minutes and exhaust memory, so it is reported instead (MTSA has no such limit and hangs).
+MAX_RANGE = 1_000_000
+
+
+def _checked_range(a: int, b: int, span: Span) -> list[Value]:
+    if b - a + 1 > MAX_RANGE:
+        raise fail("E0205", f"range {a}..{b} has {b - a + 1} values; at most {MAX_RANGE:,} "
+                   "are expanded", span)
+    return list(range(a, b + 1))
+
+
 def range_values(lo: S.Expr, hi: S.Expr, env: Env, span: Span) -> list[Value]:
     a = to_int(evaluate(lo, env), span)
     b = to_int(evaluate(hi, env), span)
     if a > b:
         raise fail("E0204", f"empty range {a}..{b}", span)
-    return list(range(a, b + 1))
+    return _checked_range(a, b, span)
 
 
 def bind_values(b: S.Bind, env: Env) -> list[Value]:
@@ -217,7 +229,7 @@ def bind_values(b: S.Bind, env: Env) -> list[Value]:
     if isinstance(r, S.RangeName):
         if r.name in env.tables.ranges:
             lo, hi = env.tables.ranges[r.name]
-            return list(range(lo, hi + 1))
+            return _checked_range(lo, hi, r.span)
         if r.name in env.tables.sets:
             return list(env.tables.sets[r.name])
         raise fail("E0201", f"undefined range or set '{r.name}'", r.span)
@@ -242,7 +254,7 @@ def part_values(p: S.Part, env: Env) -> Iterator[tuple[str, Env]]:
             name = p.expr.name
             if name in env.tables.ranges:
                 lo, hi = env.tables.ranges[name]
-                for v in range(lo, hi + 1):
+                for v in _checked_range(lo, hi, p.span):
                     yield str(v), env
                 return
             if name in env.tables.sets:

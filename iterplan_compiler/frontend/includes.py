@@ -20,7 +20,7 @@ def _resolve(name: str, including: str) -> tuple[str, str] | None:
     base = Path(including).parent if including and not including.startswith("<") else Path(".")
     cand = base / name
     if cand.is_file():
-        return str(cand), cand.read_text(encoding="utf-8", errors="replace")
+        return str(cand), cand.read_text(encoding="utf-8-sig", errors="replace")
     res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
     if res.is_file():
         return f"<stdlib>/{name}", res.read_text(encoding="utf-8")

@@ -298,7 +298,9 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
 def load(path: str) -> tuple[SlugsSpec | None, list[Diagnostic], str | None]:
     """Read and parse a slugsin file; returns ``(spec, diagnostics, text)``."""
     try:
-        with open(path, encoding="utf-8") as fh:
+        # Undecodable bytes become U+FFFD, which the reader reports at their line and column;
+        # a UTF-8 byte-order mark (as some editors write it) is dropped.
+        with open(path, encoding="utf-8-sig", errors="replace") as fh:
             text = fh.read()
     except OSError as exc:
         return None, [error("G100", f"cannot read '{path}': {exc.strerror}", Span(path, 0, 0))], None

@@ -350,9 +350,11 @@ def _cell_spec(grid: GridMap, spec, base: Path) -> np.ndarray:
     if "file" in spec:
         path = (base / spec["file"]).resolve()
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8-sig")
         except OSError as exc:
             raise MapError(f"cannot read {spec['file']}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise MapError(f"{spec['file']}: not UTF-8 text (byte {exc.start})") from None
         if path.suffix in (".json", ".geojson"):
             try:
                 return cells_from_geojson(grid, json.loads(text))
@@ -431,9 +433,11 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
             raise MapError("no map given")
         p = Path(path)
         try:
-            data = json.loads(p.read_text())
+            data = json.loads(p.read_text(encoding="utf-8-sig"))
         except OSError as exc:
             raise MapError(f"cannot read map {path}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise MapError(f"map {path}: not UTF-8 text (byte {exc.start})") from None
         except json.JSONDecodeError as exc:
             raise MapError(f"map {path}: invalid JSON: {exc}") from None
         base = p.parent

@@ -4,7 +4,7 @@ diagnostics, never a traceback or exit 3 (README "Exit codes")."""
 from __future__ import annotations
 
 import pytest
-from cli_helpers import assert_input_error, assert_no_crash, run_cli
+from cli_helpers import GOLDEN_SPEC, assert_input_error, assert_no_crash, run_cli
 
 #: argv templates of the commands that read an FSP spec; {spec} is replaced by the path.
 SPEC_COMMANDS = {
@@ -17,25 +17,8 @@ SPEC_COMMANDS = {
     "verify": ["verify", "{spec}", "--assert", "P", "--on", "S"],
 }
 
-# Known deviations in modules QA does not own (reported to the lead, see the QA notes);
-# strict, so the test starts failing -- and the marker must go -- once they are fixed.
-_SYNTH_EXIT_2 = pytest.mark.xfail(
-    strict=True, reason="iterc synth: unreadable SPEC / no controller composite exit 2 "
-                        "without a diagnostic (QA report)")
-
-
-_SYNTH_NO_SOURCE = pytest.mark.xfail(
-    strict=True, reason="iterc synth renders diagnostics without the source line and caret "
-                        "(render(diags) without sources; QA report)")
-
-
 def argv_for(command: str, spec) -> list[str]:
     return [str(spec) if a == "{spec}" else a for a in SPEC_COMMANDS[command]]
-
-
-def _params(skip: dict[str, pytest.MarkDecorator] | None = None):
-    skip = skip or {}
-    return [pytest.param(c, marks=skip[c]) if c in skip else c for c in SPEC_COMMANDS]
 
 
 @pytest.fixture
@@ -47,7 +30,7 @@ def write(tmp_path):
     return _write
 
 
-@pytest.mark.parametrize("command", _params({"synth": _SYNTH_EXIT_2}))
+@pytest.mark.parametrize("command", SPEC_COMMANDS)
 def test_missing_file(command, tmp_path, capsys):
     missing = tmp_path / "nope.lts"
     res = run_cli(capsys, *argv_for(command, missing))
@@ -55,7 +38,7 @@ def test_missing_file(command, tmp_path, capsys):
     assert "No such file" in m["msg"]
 
 
-@pytest.mark.parametrize("command", _params({"synth": _SYNTH_EXIT_2}))
+@pytest.mark.parametrize("command", SPEC_COMMANDS)
 def test_directory_instead_of_file(command, tmp_path, capsys):
     folder = tmp_path / "spec.lts"
     folder.mkdir()
@@ -81,7 +64,7 @@ def test_non_utf8_bytes(command, write, capsys):
     assert (m["line"], m["col"]) == ("2", "11"), res.err
 
 
-@pytest.mark.parametrize("command", _params({"synth": _SYNTH_NO_SOURCE}))
+@pytest.mark.parametrize("command", SPEC_COMMANDS)
 def test_syntax_error_has_line_col_and_caret(command, write, capsys):
     spec = write("syntax.lts", "A = (a -> B),\nB = (b -> A\n")
     res = run_cli(capsys, *argv_for(command, spec))
@@ -115,14 +98,12 @@ def test_undefined_composite_component(command, write, capsys):
     assert (m["line"], m["col"]) == ("2", "13") and "Missing" in m["msg"]
 
 
-@pytest.mark.xfail(strict=True, reason="front-end: `iterc check` (without --build) does not "
-                                       "resolve composite components (QA report)")
 def test_check_without_build_finds_undefined_component(write, capsys):
     spec = write("comp.lts", "A = (a -> A).\n||S = (A || Missing).\n")
     assert_input_error(run_cli(capsys, "check", spec), spec, located=True)
 
 
-@pytest.mark.parametrize("command", _params({"synth": _SYNTH_EXIT_2}))
+@pytest.mark.parametrize("command", SPEC_COMMANDS)
 def test_empty_file(command, write, capsys):
     spec = write("empty.lts", "")
     res = run_cli(capsys, *argv_for(command, spec))
@@ -131,28 +112,24 @@ def test_empty_file(command, write, capsys):
         assert res.code == 0  # an empty spec is a valid (if useless) spec
     elif command == "lts":  # `SPEC: no process or composite to build`, without a code
         assert res.code == 1 and f"{spec}: " in res.err
+    elif command == "synth":  # no controller composite: an input error
+        assert res.code == 1 and str(spec) in res.err
     else:
         assert_input_error(res, spec)
 
 
 @pytest.mark.parametrize("command", ["compile", "dot", "lts", "synth"])
 def test_unknown_composite_name(command, capsys):
-    from cli_helpers import GOLDEN_SPEC
-
     argv = {"compile": ["compile", GOLDEN_SPEC, "-c", "Nope"],
             "dot": ["dot", GOLDEN_SPEC, "Nope"],
             "lts": ["lts", GOLDEN_SPEC, "Nope"],
             "synth": ["synth", GOLDEN_SPEC, "Nope"]}[command]
     res = run_cli(capsys, *argv)
-    assert_no_crash(res)
-    assert res.code in (1, 2) and "Nope" in res.err
-    if command in ("compile", "dot"):
-        assert_input_error(res, GOLDEN_SPEC)
+    m = assert_input_error(res, GOLDEN_SPEC)
+    assert "'Nope'" in m["msg"]
 
 
 def test_verify_unknown_names_suggest(capsys):
-    from cli_helpers import GOLDEN_SPEC
-
     res = run_cli(capsys, "verify", GOLDEN_SPEC, "--assert", "AskForevr", "--on", "Environment")
     m = assert_input_error(res, GOLDEN_SPEC, code="E304")
     assert "did you mean 'AskForever'" in m["msg"]
@@ -191,8 +168,6 @@ def test_unrealizable_spec_exits_1(argv, write, capsys):
 
 
 def test_output_path_unwritable(tmp_path, capsys):
-    from cli_helpers import GOLDEN_SPEC
-
     res = run_cli(capsys, "compile", GOLDEN_SPEC, "-o", tmp_path / "no" / "dir" / "x.py")
     assert_no_crash(res)
     assert res.code == 1 and "cannot write" in res.err
@@ -213,11 +188,21 @@ DEEP_INPUTS = {
 }
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="front-end recursion (frontend/processes.py chain, frontend/parse.py "
-                          "formula): RecursionError -> exit 3 (QA report)")
 @pytest.mark.parametrize("kind", sorted(DEEP_INPUTS))
 def test_deeply_nested_input(kind, write, capsys):
     spec = write(f"{kind}.lts", DEEP_INPUTS[kind])
     res = run_cli(capsys, "check", "--build", spec)
     assert_no_crash(res)
+
+
+def test_utf8_bom_and_crlf_are_accepted(write, capsys):
+    # Notepad-style files: BOM + CRLF line ends.
+    spec = write("windows.lts", b"\xef\xbb\xbfA = (a -> A).\r\nB = (b -> B).\r\n")
+    res = run_cli(capsys, "check", spec)
+    assert res.code == 0, res.err
+
+
+def test_crlf_positions(write, capsys):
+    spec = write("crlf.lts", b"A = (a -> A).\r\nB = (b -> B\r\n")
+    m = assert_input_error(run_cli(capsys, "check", spec), spec, located=True)
+    assert (m["line"], m["col"]) == ("2", "11")

@@ -8,7 +8,7 @@ import shutil
 import sys
 
 import pytest
-from cli_helpers import EXAMPLES, GOLDEN_SPEC, assert_no_crash, run_cli
+from cli_helpers import EXAMPLES, GOLDEN_SPEC, assert_input_error, assert_no_crash, run_cli
 
 from iterplan_compiler import frontend
 from iterplan_compiler.backends.jsonout import from_json
@@ -170,3 +170,18 @@ def test_dot_warns_before_a_long_layout(tmp_path, capsys, monkeypatch):
     assert "note: 'Patrol' has" in res.err and "may take a long time" in res.err
     res = run_cli(capsys, "dot", GOLDEN_SPEC, "-o", tmp_path / "p.dot")  # no layout, no note
     assert res.code == 0 and "note:" not in res.err
+
+
+def test_both_solvers_compile_the_same_controller(fire_outputs, capsys):
+    # The canonical renumbering makes the emitted controller independent of the solver.
+    _, outputs = fire_outputs
+    res = run_cli(capsys, "compile", FIRE, "--emit", "json", "--solver", "explicit")
+    assert res.code == 0, res.err
+    assert res.out == outputs["json"]
+
+
+def test_verify_state_limit_is_a_diagnostic(capsys):
+    res = run_cli(capsys, "verify", FIRE, "--assert", "VisitCondition", "--on",
+                  "FirePatrolSystem", "--max-states", "3")
+    m = assert_input_error(res, FIRE, code="E303", located=True)
+    assert "exceeds 3 product states" in m["msg"]

@@ -40,8 +40,6 @@ def test_solve_small_spec(write, capsys):
     assert res.code == 0 and "REALIZABLE" in res.out
 
 
-@pytest.mark.xfail(strict=True, reason="gr1/slugsin.load reads strict UTF-8: non-UTF-8 input "
-                                       "is an internal error (exit 3; QA report)")
 def test_solve_binary_garbage(write, capsys):
     spec = write("garbage.slugsin", GARBAGE)
     assert_input_error(run_cli(capsys, "solve", spec), spec)
@@ -81,8 +79,6 @@ def test_run_bad_map(name, data, controller_module, write, tmp_path, capsys):
     assert res.code == 1 and name in res.err, res.err
 
 
-@pytest.mark.xfail(strict=True, reason="runtime/grid.load_map reads strict UTF-8: a non-UTF-8 "
-                                       "map is an internal error (exit 3; QA report)")
 def test_run_binary_map(controller_module, write, tmp_path, capsys):
     path = write("garbage.json", GARBAGE)
     res = run_cli(capsys, "run", controller_module, "--map", path, "--out", tmp_path / "out")
