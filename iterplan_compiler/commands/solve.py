@@ -1,4 +1,4 @@
-"""``iterc solve SPEC.slugsin`` — GR(1) realizability and strategy for the slugs input format.
+"""``iterc solve SPEC.slugsin`` — GR(1) realizability and strategy for the slugs input formats.
 
 Exit codes: 0 realizable, 1 unrealizable or input errors, 2 usage.
 """
@@ -9,7 +9,7 @@ import argparse
 import json
 import sys
 
-HELP = "GR(1) realizability/strategy for a slugsin file"
+HELP = "GR(1) realizability/strategy for a slugsin (or structuredslugs) file"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,12 +53,12 @@ def run(args: argparse.Namespace) -> int:
     if fmt == "auto":
         fmt = "structuredslugs" if args.spec.endswith(".structuredslugs") else "slugsin"
     if fmt == "structuredslugs":
-        # Not implemented: compile with slugs' own tools/StructuredSlugsParser/compiler.py
-        # to slugsin first (see docs/gr1.md).
-        print("iterc solve: the structuredslugs format is not supported yet; convert it to "
-              "slugsin first (docs/gr1.md)", file=sys.stderr)
-        return 2
-    spec, diags, text = slugsin.load(args.spec)
+        # Infix formulas and bounded integers, translated to the slugsin IR (gr1/structured.py).
+        from iterplan_compiler.gr1 import structured
+
+        spec, diags, text = structured.load(args.spec)
+    else:
+        spec, diags, text = slugsin.load(args.spec)
     sources = {args.spec: text} if text is not None else {}
     if diags:
         print(render(diags, sources), file=sys.stderr)

@@ -106,12 +106,15 @@ def synthesize(
     stats["t_prepare"] = time.perf_counter() - t0
     name = problem.name
     try:
+        # §3.6 `permissive`: both solvers end in strategy.extract_controller
         if solver == "explicit":
-            result = _solve_explicit(spec, stats, say, max_states, explain, name)
+            result = _solve_explicit(spec, stats, say, max_states, explain, name,
+                                     permissive=problem.permissive)
         else:
             from iterplan_compiler.synthesis.game import solve_symbolic
 
-            result = solve_symbolic(spec, stats, say, explain=explain, name=name, order=order)
+            result = solve_symbolic(spec, stats, say, explain=explain, name=name,
+                                    order=order, permissive=problem.permissive)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
         return SynthesisResult(False, None, None, msg, stats, (error("S003", msg, problem.span),))
@@ -138,8 +141,8 @@ def synthesize(
 
 
 def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
-                    max_states: int | None, explain: bool, name: str
-                    ) -> tuple[bool, LTS | None, str]:
+                    max_states: int | None, explain: bool, name: str, *,
+                    permissive: bool = False) -> tuple[bool, LTS | None, str]:
     t = time.perf_counter()
     game = _explicit.build_game(spec, max_states=max_states)
     stats["game_states"] = game.num_states
@@ -166,7 +169,7 @@ def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], 
     if not ranks.winning(game.initial):
         return False, None, _explain(spec, game, win, explain)
     t = time.perf_counter()
-    ctrl = extract_controller(game, ranks, name, alphabet)
+    ctrl = extract_controller(game, ranks, name, alphabet, permissive=permissive)
     stats["t_extract"] = time.perf_counter() - t
     return True, ctrl, ""
 

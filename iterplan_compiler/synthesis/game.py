@@ -367,8 +367,8 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 
 
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
-                   explain: bool, name: str, order: str = "clustered"
-                   ) -> tuple[bool, LTS | None, str]:
+                   explain: bool, name: str, order: str = "clustered",
+                   permissive: bool = False) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why)."""
     t = time.perf_counter()
     g = SymbolicGame(spec, order=order)
@@ -420,7 +420,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
                         heights=heights)
     if not ranks.winning(game.initial):  # pragma: no cover - would be a solver bug
         raise AssertionError("symbolic and rank solvers disagree on the initial state")
-    ctrl = extract_controller(game, ranks, name, alphabet)
+    ctrl = extract_controller(game, ranks, name, alphabet, permissive=permissive)
     stats["t_extract"] = time.perf_counter() - t
     return True, ctrl, ""
 

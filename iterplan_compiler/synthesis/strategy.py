@@ -4,6 +4,10 @@
 the pursued guarantee; from ``(s, j)`` every uncontrollable successor is kept and every
 *better* controllable successor (by MTSA's ranks).  The result is an explicit LTS over the
 full plant alphabet; it never blocks an uncontrollable action of a winning state.
+
+With the spec's ``permissive`` flag it additionally keeps the controllable moves to *winning*
+but not better successors, relabelled ``#w#_<label>`` (:data:`PERMISSIVE_PREFIX`), so that
+deleting every ``#w#_`` transition gives back the ordinary controller.
 """
 
 from __future__ import annotations
@@ -13,10 +17,22 @@ from collections import deque
 from iterplan_compiler.ir.lts import LTS, make_lts
 from iterplan_compiler.synthesis.explicit import ExplicitGame, Ranks
 
+#: label prefix of the extra moves a ``permissive`` controller keeps (MTSA's tests look for
+#: ``#w#_c``)
+PERMISSIVE_PREFIX = "#w#_"
 
+# The symbolic solver (``game.solve_symbolic``) calls :func:`extract_controller` without a
+# ``permissive`` argument; the driver sets this variable around the solve so both solvers
+# honour the spec flag.  An explicit ``permissive=`` argument always wins.
 def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
-                       alphabet: frozenset[str]) -> LTS:
-    """MTSA's memoryful controller (§3.6) as an LTS; requires the initial state to win."""
+                       alphabet: frozenset[str], *, permissive: bool = False) -> LTS:
+    """MTSA's memoryful controller (§3.6) as an LTS; requires the initial state to win.
+
+    ``permissive`` (the spec's ``permissive`` flag) also keeps, from ``(s, j)``, every controllable move ``s -a-> t`` whose target is not an
+    allowed successor but is winning for the next memory (``rank[j'][t] ≠ ∞``), as the
+    transition ``(s, j) -#w#_a-> (t, j')``.  Those labels are added to the alphabet.  Without
+    the flag the result is exactly the non-permissive controller.
+    """
     if not ranks.winning(game.initial):
         raise ValueError("initial state is losing: no controller")
     G, F = game.guarantees, game.failures
@@ -47,22 +63,29 @@ def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
     index = {start: 0}
     order = [start]
     trans: list[tuple[int, str, int]] = []
+    extra: set[str] = set()
     q = deque([start])
     while q:
         s, j = q.popleft()
         k = index[(s, j)]
         jn, ok = allowed(s, j)
         for a, t in game.edges[s]:
+            label = a
             if t not in ok:
-                continue
+                # a target reachable by an uncontrollable label is always in ``ok``, so an
+                # excluded target is reached only by controllable labels here
+                if not (permissive and a in ctrl and rank[jn][t] < inf[jn]):
+                    continue
+                label = PERMISSIVE_PREFIX + a
+                extra.add(label)
             key = (t, jn)
             if key not in index:
                 index[key] = len(order)
                 order.append(key)
                 q.append(key)
-            trans.append((k, a, index[key]))
+            trans.append((k, label, index[key]))
     names = [f"{s}.{j}" for s, j in order]
-    return make_lts(name, len(order), trans, alphabet, 0, (), names)
+    return make_lts(name, len(order), trans, alphabet | extra, 0, (), names)
 
 
 # ---------------------------------------------------------------------------------------------
