@@ -87,6 +87,13 @@ def lts_to_fsp(lts: LTS) -> str:
         return "ERROR" if t == ERROR else f"Q{t}"
 
     live = _reachable_states(lts.initial, groups)
+    used_live = {a for s in live for labels in groups[s].values() for a in labels}
+    if TAU in used_live and not (lts.alphabet - used_live) and not groups[live[-1]]:
+        # `Qn = STOP\{_tau}.` would read as the label difference `STOP \ {_tau}`: end the
+        # definition with a state that has moves (order of locals is free in FSP).
+        moving = [s for s in live if groups[s]]
+        live.remove(moving[-1])
+        live.append(moving[-1])
     lines = [f"{process_name(lts.name)} = Q{lts.initial},"]
     used: set[str] = set()
     for s in live:

@@ -47,3 +47,10 @@ def test_unreachable_states_are_not_printed():
 def test_output_is_deterministic():
     m = lts("M", 3, [(0, "x", 1), (0, "y", 2), (2, "x", 0)])
     assert lts_to_fsp(m) == lts_to_fsp(lts("M", 3, list(reversed(m.transitions))))
+
+
+def test_hiding_never_follows_a_bare_stop():
+    # `Q1 = STOP\{_tau}.` would parse as the label difference STOP \ {_tau}: the printer ends
+    # the definition with a state that has moves instead (found by the round-trip property).
+    text = lts_to_fsp(lts("R", 2, [(0, TAU, 1)]))
+    assert text == "R = Q0,\n\tQ1\t= STOP,\n\tQ0\t= (_tau -> Q1)\\{_tau}.\n"
