@@ -12,7 +12,6 @@ Contract of a row check (:func:`check_row`): it never raises; every outcome is a
 * ``unsupported`` — the front-end rejected a construct with an "unsupported construct"
   diagnostic (counted separately, as the corpus README asks);
 * ``error`` — the file produced error diagnostics where MTSA compiles it;
-* ``missing`` — a pipeline stage this row needs is not part of this build;
 * ``crash`` — an exception escaped the compiler (a bug);
 * ``timeout`` — the row exceeded its time limit (set by the driver).
 
@@ -37,7 +36,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-STATUSES = ("pass", "fail", "unsupported", "error", "missing", "crash", "timeout")
+STATUSES = ("pass", "fail", "unsupported", "error", "crash", "timeout")
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,16 +143,10 @@ def check_row(root: Path, row: Row) -> RowResult:
 
 
 def _check(root: Path, row: Row) -> tuple[str, str]:
-    try:
-        from iterplan_compiler import frontend
-    except ImportError as exc:
-        return "missing", f"front-end: {exc}"
+    from iterplan_compiler import frontend
     from iterplan_compiler.diagnostics import has_errors
 
-    load = getattr(frontend, "load", None)
-    if load is None:
-        return "missing", "front-end: frontend.load is not part of this build"
-    model, diags = load(root / row.file)
+    model, diags = frontend.load(root / row.file)
     kind = row.kind
     if kind == "recursion":
         msgs = " ".join(d.message.lower() for d in diags)
@@ -201,7 +194,7 @@ def _check(root: Path, row: Row) -> tuple[str, str]:
             f"{lts.num_states} states vs ExpectedC {exp.num_states}: "
             + ("bisimilar" if ok else "not bisimilar"))
     if kind in ("legal", "not legal"):
-        return _check_legality(model, row, lts)
+        return _check_legality(model, row)
     return "pass", "compiles"
 
 
@@ -224,41 +217,19 @@ def _check_compiles(model, row: Row) -> tuple[str, str]:
 
 
 def _check_synthesis(model, row: Row) -> tuple[str, str]:
-    try:
-        from iterplan_compiler.synthesis import conformance as synth_conf
-    except ImportError:
-        synth_conf = None
-    if synth_conf is not None and hasattr(synth_conf, "check_row"):
-        ok, detail = synth_conf.check_row(model, row)
-        if ok is None:
-            return "unsupported", detail
-        return ("pass" if ok else "fail"), detail
-    try:
-        from iterplan_compiler.synthesis.driver import synthesize
-    except ImportError as exc:
-        return "missing", f"synthesis: {exc}"
-    from iterplan_compiler.diagnostics import has_errors
+    """Verdict plus the row's checks, by :func:`iterplan_compiler.synthesis.conformance.check_row`
+    (``None`` there means the row needs an unsupported feature)."""
+    from iterplan_compiler.synthesis.conformance import check_row as check_synthesis_row
 
-    problem, diags = model.synthesis_problem(row.composite_name)
-    if problem is None or has_errors(diags):
-        if any(_is_unsupported(d) for d in diags):
-            return "unsupported", _first_errors([d for d in diags if _is_unsupported(d)])
-        return "error", _first_errors(diags)
-    result = synthesize(problem)
-    want = row.kind == "realizable"
-    verdict = "realizable" if result.realizable else "unrealizable"
-    return ("pass" if result.realizable == want else "fail"), verdict
+    ok, detail = check_synthesis_row(model, row)
+    if ok is None:
+        return "unsupported", detail
+    return ("pass" if ok else "fail"), detail
 
 
-def _check_legality(model, row: Row, lts) -> tuple[str, str]:
-    try:
-        from iterplan_compiler.ir.legality import is_legal  # noqa: F401
-    except ImportError as exc:
-        return "missing", f"legality: {exc}"
-    checker = getattr(model, "legality", None)
-    if checker is None:
-        return "missing", "model.legality (the pair of machines to check) not available"
-    legal, detail = checker(row.composite_name)
+def _check_legality(model, row: Row) -> tuple[str, str]:
+    """MTSA's LegalityAnalyser verdict for the row's composite (``Model.legality``)."""
+    legal, detail = model.legality(row.composite_name)
     want = row.kind == "legal"
     return ("pass" if legal == want else "fail"), detail
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from iterplan_compiler.gr1.slugsin import to_prefix
+
 
 @dataclass(frozen=True, eq=False)
 class F:
@@ -56,19 +58,8 @@ class F:
         return F(self.op, tuple(a.p for a in self.args))
 
     def prefix(self) -> str:
-        out: list[str] = []
-        stack = [self]
-        sym = {"not": "!", "and": "&", "or": "|", "xor": "^"}
-        while stack:
-            e = stack.pop()
-            if e.op == "const":
-                out.append("1" if e.value else "0")
-            elif e.op == "var":
-                out.append(e.name + ("'" if e.primed else ""))
-            else:
-                out.append(sym[e.op])
-                stack.extend(reversed(e.args))
-        return " ".join(out)
+        """slugsin prefix notation (same node shape as the reader's ``Expr``)."""
+        return to_prefix(self)  # type: ignore[arg-type]
 
 
 TRUE = F("const", value=True)

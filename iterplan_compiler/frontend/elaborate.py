@@ -980,19 +980,10 @@ def _fluents_in(f: F.Formula, out: set[str]) -> None:
 
 
 def _cb_refs(b: S.CBody, out: set[str]) -> None:
-    if isinstance(b, S.CRef):
-        out.add(b.name)
-    elif isinstance(b, S.CPar):
-        for it in b.items:
-            _cb_refs(it, out)
-    elif isinstance(b, S.CForall):
-        _cb_refs(b.body, out)
-    elif isinstance(b, S.CIf):
-        _cb_refs(b.then, out)
-        if b.other is not None:
-            _cb_refs(b.other, out)
-    elif isinstance(b, S.CItem):
-        _cb_refs(b.prim, out)
+    """Add the names of every component a composite body references to ``out``."""
+    refs: list[S.CRef] = []
+    _cb_crefs(b, refs)
+    out.update(r.name for r in refs)
 
 
 def _cb_crefs(b: S.CBody, out: list[S.CRef]) -> None:

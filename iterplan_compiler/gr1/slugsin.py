@@ -22,6 +22,7 @@ bad input.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error, warning
@@ -295,8 +296,13 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
     return SlugsSpec(tuple(inputs), tuple(outputs), sections, path), diags
 
 
-def load(path: str) -> tuple[SlugsSpec | None, list[Diagnostic], str | None]:
-    """Read and parse a slugsin file; returns ``(spec, diagnostics, text)``."""
+def load(path: str, parser: Callable[[str, str], tuple[SlugsSpec | None, list[Diagnostic]]]
+         | None = None) -> tuple[SlugsSpec | None, list[Diagnostic], str | None]:
+    """Read and parse a GR(1) file; returns ``(spec, diagnostics, text)``.
+
+    ``parser`` is :func:`parse` (slugsin) unless another front-end for the same
+    :class:`SlugsSpec` is given (``structured.parse`` for structuredslugs).
+    """
     try:
         # Undecodable bytes become U+FFFD, which the reader reports at their line and column;
         # a UTF-8 byte-order mark (as some editors write it) is dropped.
@@ -304,7 +310,7 @@ def load(path: str) -> tuple[SlugsSpec | None, list[Diagnostic], str | None]:
             text = fh.read()
     except OSError as exc:
         return None, [error("G100", f"cannot read '{path}': {exc.strerror}", Span(path, 0, 0))], None
-    spec, diags = parse(text, path)
+    spec, diags = (parser or parse)(text, path)
     return spec, diags, text
 
 

@@ -32,6 +32,7 @@ import re
 from dataclasses import dataclass
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error
+from iterplan_compiler.gr1 import slugsin
 from iterplan_compiler.gr1.slugsin import (
     FALSE,
     FORMULA_SECTIONS,
@@ -431,10 +432,4 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
 
 def load(path: str) -> tuple[SlugsSpec | None, list[Diagnostic], str | None]:
     """Read and translate a structuredslugs file; returns ``(spec, diagnostics, text)``."""
-    try:
-        with open(path, encoding="utf-8-sig", errors="replace") as fh:
-            text = fh.read()
-    except OSError as exc:
-        return None, [error("G100", f"cannot read '{path}': {exc.strerror}", Span(path, 0, 0))], None
-    spec, diags = parse(text, path)
-    return spec, diags, text
+    return slugsin.load(path, parser=parse)
