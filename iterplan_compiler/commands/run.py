@@ -2,20 +2,41 @@
 
 The controller module is what ``iterc compile`` writes (a module-level ``TABLE``); the map is a
 JSON file (see ``docs/runtime.md``).  The default vehicle is the built-in simulator; ``--vehicle
-mavlink --connect tcp:127.0.0.1:5760`` flies an ArduPlane.  Outputs go to ``--out`` (default
-``./run-out``): ``track.csv``, ``track.geojson``, ``events.csv``, ``summary.json`` and
-``track.png``.  Exit code 0 when the mission completed, 1 when it ended early (safely) or the
-input was bad, 2 for usage errors.
+mavlink --connect tcp:127.0.0.1:5760`` flies an ArduPlane (ArduPilot SITL or a real one).
+
+Outputs go to ``--out`` (default ``./run-out``, checked before take-off): ``track.csv``,
+``track.geojson``, ``events.csv``, ``summary.json``, ``track.png`` and, on MAVLink,
+``commands.csv`` (every command sent).  They are written however the run ends — completed, a
+fault, Ctrl-C or SIGTERM — after the safe state (``--on-end`` / ``--on-fault``) was commanded.
+Exit code 0 when the mission completed, 1 when it ended early (safely) or the input was bad,
+2 for usage errors.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import math
+import signal
 import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 HELP = "run a generated controller on the simulator or a MAVLink vehicle"
+
+SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v) or v <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    return v
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,6 +46,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vehicle", choices=("sim", "mavlink"), default="sim")
     parser.add_argument("--connect", default="tcp:127.0.0.1:5760",
                         help="MAVLink connection string (with --vehicle mavlink)")
+    parser.add_argument("--start", choices=("auto", "ground", "airborne"), default="auto",
+                        help="take off from the ground, take over a flying vehicle, or pick by "
+                             "what the vehicle reports (default)")
     parser.add_argument("--sorter", choices=("distance", "last", "random"), default="distance")
     parser.add_argument("--seed", type=int, default=0, help="seed for the random sorter and sim")
     parser.add_argument("--ideal-compute", action="store_true",
@@ -37,12 +61,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "occurs for the K-th time (default K=1), e.g. `--until restart` "
                              "or `--until n.next:2`; a controllable LABEL ends it before the "
                              "action runs")
-    parser.add_argument("--max-time", type=float, default=4 * 3600.0,
-                        help="mission time limit in seconds")
+    parser.add_argument("--max-time", type=_positive, default=4 * 3600.0, metavar="S",
+                        help="end the run after S seconds of mission time or of wall time, "
+                             "whichever comes first (default 4 h)")
     parser.add_argument("--planner", choices=("course", "carrot"), default=None,
                         help="path following: course hold or fly-to carrots "
                              "(default: course on sim, carrot on mavlink)")
-    parser.add_argument("--airspeed", type=float, default=None, help="sim airspeed (m/s)")
+    parser.add_argument("--airspeed", type=_positive, default=None, metavar="M/S",
+                        help="cruise airspeed: the simulator's; on MAVLink commanded with "
+                             "DO_CHANGE_SPEED (default: the vehicle's AIRSPEED_CRUISE)")
+    parser.add_argument("--turn-radius", type=_positive, default=None, metavar="M",
+                        help="planning turn radius of the motion planner and the Sorter "
+                             "(default: 1.4 x the turn at 45 deg bank at cruise speed)")
+    parser.add_argument("--loiter-radius", type=_positive, default=None, metavar="M",
+                        help="radius of loiter circles, e.g. the end-of-mission loiter "
+                             "(default: the vehicle's WP_LOITER_RAD; 80 on the simulator)")
+    parser.add_argument("--altitude", type=_positive, default=None, metavar="M",
+                        help="flight altitude above home (default: the map's)")
+    parser.add_argument("--param", action="append", default=[], metavar="FILE",
+                        help="ArduPilot parameter file(s) for the simulator: calibrate it to "
+                             "ArduPlane SITL with these parameters (AIRSPEED_CRUISE, "
+                             "ROLL_LIMIT_DEG, WP_LOITER_RAD, ...)")
+    parser.add_argument("--on-end", choices=SAFE_ACTIONS, default="loiter",
+                        help="what to command when the mission completes or is interrupted "
+                             "(Ctrl-C, SIGTERM): loiter over the map centre (default), rtl, "
+                             "land, none")
+    parser.add_argument("--on-fault", choices=SAFE_ACTIONS, default="rtl",
+                        help="what to command when the mission ends on a fault (GPS or "
+                             "telemetry lost, a refused command, controller or planner error, "
+                             "time limit); default rtl.  After a pilot/failsafe mode change, a "
+                             "disarm or link loss nothing is commanded")
+    parser.add_argument("--ready-timeout", type=_positive, default=180.0, metavar="S",
+                        help="MAVLink: wall seconds to wait for GPS fix, home and pre-arm checks")
     parser.add_argument("--wind", default=None, metavar="E,N",
                         help="sim wind vector east,north in m/s")
     parser.add_argument("--wind-margin", type=float, default=None, metavar="M/S",
@@ -57,12 +107,36 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.runtime.bindings import BindingError
     from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
     from iterplan_compiler.runtime.grid import MapError, load_map
-    from iterplan_compiler.runtime.sim import SimParams, SimVehicle
+    from iterplan_compiler.runtime.parm import ParmError, read_parm
+    from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
 
     def err(msg: str) -> int:
         print(f"iterc run: error: {msg}", file=sys.stderr)
         return 1
 
+    def usage(msg: str) -> int:
+        print(f"iterc run: {msg}", file=sys.stderr)
+        return 2
+
+    until = None
+    if args.until is not None:
+        until = _parse_until(args.until)
+        if until is None:
+            return usage(f"--until expects LABEL or LABEL:K (K >= 1), not {args.until!r}")
+    passes = args.passes if args.passes is not None else (0 if until else 1)
+    if passes < 0:
+        return usage("--passes must be >= 0")
+    wind = (0.0, 0.0)
+    if args.wind:
+        try:
+            wind = tuple(float(v) for v in args.wind.split(","))  # type: ignore[assignment]
+            if len(wind) != 2 or not all(math.isfinite(w) for w in wind):
+                raise ValueError
+        except ValueError:
+            return usage("--wind expects E,N (m/s)")
+    if args.vehicle == "mavlink" and (args.param or args.wind):
+        return usage("--param and --wind configure the simulator; set a real vehicle's "
+                     "parameters with your ground station")
     try:
         table = load_controller(args.controller)
     except ValueError as exc:
@@ -71,73 +145,151 @@ def run(args: argparse.Namespace) -> int:
         grid = load_map(args.map)
     except MapError as exc:
         return err(f"{args.map}: {exc}")
-    until = None
-    if args.until is not None:
-        until = _parse_until(args.until)
-        if until is None:
-            print(f"iterc run: --until expects LABEL or LABEL:K (K >= 1), not {args.until!r}",
-                  file=sys.stderr)
-            return 2
-    passes = args.passes if args.passes is not None else (0 if until else 1)
-    if passes < 0:
-        print("iterc run: --passes must be >= 0", file=sys.stderr)
-        return 2
+    if until is not None:
+        from iterplan_compiler.runtime.bindings import canon
+        labels = {canon(a) for a in table.controllable | table.uncontrollable}
+        if until[0] not in labels:
+            return usage(f"--until {until[0]}: the controller has no event of that name")
+    try:
+        params = read_parm(args.param)
+    except ParmError as exc:
+        return err(str(exc))
+    out = Path(args.out)
+    problem = _check_out(out, [Path(args.controller), Path(args.map), *map(Path, args.param)])
+    if problem:
+        return err(problem)
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
 
-    vehicle = None
-    wind_margin = args.wind_margin or 0.0
-    try:
-        if args.vehicle == "sim":
-            kw = {"seed": args.seed}
-            if args.airspeed:
-                kw["airspeed"] = args.airspeed
-            if args.wind:
-                try:
-                    e, n = (float(v) for v in args.wind.split(","))
-                except ValueError:
-                    print("iterc run: --wind expects E,N (m/s)", file=sys.stderr)
-                    return 2
-                kw.update(wind_east=e, wind_north=n)
-                if args.wind_margin is None:
-                    wind_margin = math.hypot(e, n)
-            vehicle = SimVehicle(SimParams(**kw), home=grid.home, heading=grid.arrival_heading)
-            mode = args.planner or "course"
-        else:
-            from iterplan_compiler.runtime.mavlink import MavlinkError, MavlinkVehicle
-            try:
-                vehicle = MavlinkVehicle.connect(args.connect, grid.frame, progress=progress)
-            except MavlinkError as exc:
-                return err(str(exc))
-            mode = args.planner or "carrot"
-        cfg = RunConfig(sorter=args.sorter, seed=args.seed, ideal_compute=args.ideal_compute,
-                        passes=passes, max_time=args.max_time, planner_mode=mode,
-                        wind=wind_margin,
-                        progress=progress, progress_every=60.0,
-                        on_event=_until_hook(*until) if until else None)
+    altitude = args.altitude if args.altitude is not None else grid.altitude
+    wind_margin = args.wind_margin if args.wind_margin is not None else math.hypot(*wind)
+    vehicle: Any = None
+    with _sigterm_as_interrupt():
         try:
+            if args.vehicle == "sim":
+                vehicle = _sim_vehicle(args, grid, params, wind, altitude)
+                mode = args.planner or "course"
+            else:
+                from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
+                link = LinkConfig(ready_timeout=args.ready_timeout, airspeed=args.airspeed,
+                                  loiter_radius=args.loiter_radius)
+                vehicle = MavlinkVehicle.connect(args.connect, grid.frame, link,
+                                                 progress=progress)
+                mode = args.planner or "carrot"
+            cfg = RunConfig(sorter=args.sorter, seed=args.seed, ideal_compute=args.ideal_compute,
+                            passes=passes, max_time=args.max_time, max_wall=args.max_time,
+                            planner_mode=mode, wind=wind_margin, altitude=altitude,
+                            turn_radius=args.turn_radius, start=Start(args.start),
+                            end_action=SafeAction(args.on_end),
+                            fault_action=SafeAction(args.on_fault),
+                            progress=progress, progress_every=60.0,
+                            on_event=_until_hook(*until) if until else None)
             result = Executor(table, grid, vehicle, config=cfg).run()
-        except BindingError as exc:
+        except KeyboardInterrupt:
+            return err("interrupted before the mission started; nothing was commanded")
+        except (VehicleError, BindingError) as exc:
             return err(str(exc))
-    finally:
-        if vehicle is not None:
-            vehicle.close()
-
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    result.write_track_csv(out / "track.csv")
-    result.write_geojson(out / "track.geojson")
-    result.write_events_csv(out / "events.csv")
-    result.write_summary(out / "summary.json")
-    if not args.no_plot:
-        result.plot(out / "track.png")
+        finally:
+            if vehicle is not None:
+                vehicle.close()
+        _write_outputs(result, out, vehicle, plot=not args.no_plot)
     s = result.summary
     print(f"{'mission completed' if result.ok else 'mission ended early: ' + result.reason}")
-    print(f"  duration {s['duration_s']:.1f} s, distance {s['distance_m']:.0f} m, ideal "
-          f"{s['ideal_duration_s']:.1f} s, overhead "
+    print(f"  duration {s['duration_s']:.1f} s at {s['speed_mps']:.1f} m/s, distance "
+          f"{s['distance_m']:.0f} m, ideal {s['ideal_duration_s']:.1f} s, overhead "
           f"{s['overhead_pct'] if s['overhead_pct'] is not None else 'n/a'} %")
     print(f"  visited {s['arrivals']} cells, {s['photos']} photos, {s['steps']} controller steps, "
           f"compute {s['compute_s']:.3f} s; outputs in {out}")
+    print(f"  safe state: {s['safe_state']}")
     return 0 if result.ok else 1
+
+
+def _sim_vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
+                 wind: tuple[float, float], altitude: float) -> Any:
+    from iterplan_compiler.runtime.sim import SimParams, SimVehicle
+
+    kw: dict[str, float] = {"seed": args.seed, "wind_east": wind[0], "wind_north": wind[1]}
+    if args.airspeed:
+        kw["airspeed"] = args.airspeed
+    if args.loiter_radius:
+        kw["loiter_radius"] = args.loiter_radius
+    sp = SimParams.from_arduplane(params, altitude=altitude, **kw) if params \
+        else SimParams(**kw)  # type: ignore[arg-type]
+    return SimVehicle(sp, home=grid.home, heading=grid.arrival_heading)
+
+
+def _check_out(out: Path, inputs: list[Path]) -> str | None:
+    """Problems with ``--out`` found before the mission (so a flight's log is never lost)."""
+    if out.exists() and not out.is_dir():
+        return f"--out {out} exists and is not a folder"
+    resolved = {p.resolve() for p in inputs if p.exists()}
+    if out.resolve() in resolved:
+        return f"--out {out} is an input file"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".iterplan-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        return f"--out {out} is not writable: {exc.strerror or exc}"
+    for name in OUTPUTS:
+        if (out / name).resolve() in resolved:
+            return f"--out {out} would overwrite the input {out / name}"
+    return None
+
+
+OUTPUTS = ("track.csv", "track.geojson", "events.csv", "summary.json", "track.png",
+           "commands.csv")
+
+
+def _write_outputs(result: Any, out: Path, vehicle: Any, plot: bool) -> None:
+    # A second Ctrl-C must not cut the outputs short.
+    with _interrupts_deferred():
+        for stale in OUTPUTS:               # never leave a previous run's files beside these
+            (out / stale).unlink(missing_ok=True)
+        result.write_track_csv(out / "track.csv")
+        result.write_geojson(out / "track.geojson")
+        result.write_events_csv(out / "events.csv")
+        log = getattr(vehicle, "command_log", None)
+        if log is not None:
+            with open(out / "commands.csv", "w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(["t", "command", "detail"])
+                for t, name, detail in log:
+                    w.writerow([f"{t:.2f}", name, detail])
+        if plot:
+            result.plot(out / "track.png")
+        result.write_summary(out / "summary.json")    # last: its presence marks a whole set
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM ends a mission like Ctrl-C (safe state, outputs) instead of killing it."""
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt(f"signal {signum}")
+    try:
+        old: Any = signal.signal(signal.SIGTERM, handler)
+    except ValueError:          # not the main thread (an embedding application)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Ignore SIGINT/SIGTERM while the outputs are written (the mission has ended anyway)."""
+    try:
+        old = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def _parse_until(text: str) -> tuple[str, int] | None:
@@ -157,7 +309,7 @@ def _parse_until(text: str) -> tuple[str, int] | None:
     return (label, k) if k >= 1 else None
 
 
-def _until_hook(label: str, k: int):
+def _until_hook(label: str, k: int) -> Callable[[str, str], bool]:
     """Executor ``on_event`` hook: True (end the mission) at the k-th event ``label``."""
     from iterplan_compiler.runtime.bindings import canon
 

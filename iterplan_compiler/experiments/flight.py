@@ -80,6 +80,7 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
     try:
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
         from iterplan_compiler.runtime.sim import SimVehicle
+        from iterplan_compiler.runtime.vehicle import SafeAction
     except ImportError as exc:
         raise StageError("runtime", f"the executor is not available in this build ({exc})") \
             from None
@@ -117,7 +118,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
     # compute_clock: charge CPU time of this process, not wall time, so the think-time charge
     # does not depend on how busy the machine is (sweeps run missions in parallel processes).
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
-                    max_time=max_time, log_limit=0, end_action="loiter",
+                    max_time=max_time, log_limit=0, end_action=SafeAction.LOITER,
+                    fault_action=SafeAction.LOITER,
                     compute_clock=time.process_time, on_event=on_controller_event)
     try:
         # map_data=None: the rules load_map put on the grid (the executor applies them itself).

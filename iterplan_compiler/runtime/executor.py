@@ -16,12 +16,23 @@ simulation is advanced by it before the next physical tick and before planning a
 (the aircraft holds its last command meanwhile), so a faster-than-real-time run still shows the
 iteration overhead the paper measures.  ``ideal_compute=True`` turns this off (deterministic).
 
-A mission ends when ``passes`` complete iterator passes have been answered (``n.next``), at the
-time limit, or early and *safely* (RTL or loiter, ``end_action``) on a refused event, a
+Start: :meth:`Vehicle.prepare` waits for the vehicle to be ready and says whether the mission
+starts on the ground (arm, take off, unless the controller has its own ``takeoff``) or in the
+air (``Vehicle.take_control``).
+
+A mission ends when ``passes`` complete iterator passes have been answered (``n.next``), when
+``on_event`` says so, at the time limit (mission time ``max_time`` or wall time ``max_wall``),
+on an interrupt (``KeyboardInterrupt``: Ctrl-C, or SIGTERM as ``iterc run`` maps it), or early on
+a fault: a vehicle fault (``vehicle.FAULTS``: link, telemetry or GPS lost, the pilot or a
+failsafe changed the mode, disarmed, a refused command), a refused controller event, a
 controller deadlock, a livelock (many steps that neither wait for the vehicle nor move the
-iterator), a planner
-that cannot reach a cell, link loss, or a binding error.  Every event is logged with mission
-time and pose (up to ``log_limit`` entries; counters are always complete).
+iterator), a planner that cannot reach a cell, or a binding error.
+
+Safe end: a completed or interrupted mission commands ``end_action``, a fault ``fault_action``
+(:class:`~iterplan_compiler.runtime.vehicle.SafeAction`: loiter over the map centre, RTL, land,
+or none) — unless the vehicle is *hands off* (the pilot or the autopilot's failsafe is in
+charge: nothing is sent) or not flying.  Every event is logged with mission time and pose (up to
+``log_limit`` entries; counters are always complete).
 """
 
 from __future__ import annotations
@@ -50,7 +61,14 @@ from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.iterator import Iterator
 from iterplan_compiler.runtime.planner import MotionPlanner
 from iterplan_compiler.runtime.sorter import Pose, make_sorter
-from iterplan_compiler.runtime.vehicle import Vehicle
+from iterplan_compiler.runtime.vehicle import (
+    FAULTS,
+    SafeAction,
+    Start,
+    Vehicle,
+    VehicleError,
+    planning_radius,
+)
 
 
 @dataclass
@@ -62,6 +80,8 @@ class RunConfig:
     ideal_compute: bool = False
     passes: int = 1                 # stop after this many complete iterator passes; 0 = never
     max_time: float = 4 * 3600.0    # mission seconds
+    max_wall: float | None = None   # wall seconds (a frozen vehicle clock cannot hang a run)
+    start: Start = Start.AUTO
     tick: float = 0.25              # physical time step while waiting (s)
     altitude: float | None = None   # default: the map's altitude
     turn_radius: float | None = None   # planning radius; default 1.4 x the vehicle's minimum
@@ -72,7 +92,8 @@ class RunConfig:
     planner_mode: str = "course"
     lead: float | None = None
     accept: float | None = None
-    end_action: str = "rtl"         # what a safe end commands: rtl, loiter or none
+    end_action: SafeAction = SafeAction.LOITER   # commanded when the mission completes or
+    fault_action: SafeAction = SafeAction.RTL    # is interrupted / when it ends on a fault
     log_limit: int = 200_000
     livelock_limit: int = 100_000   # steps without waiting or iterator progress
     progress: Callable[[str], None] | None = None
@@ -271,30 +292,13 @@ class Executor:
         self.vehicle = vehicle
         self.cfg = config or RunConfig()
         self.altitude = self.cfg.altitude if self.cfg.altitude is not None else grid.altitude
-        gust = max(0.0, self.cfg.wind) / max(vehicle.airspeed, 1.0)
-        radius = self.cfg.turn_radius or 1.4 * vehicle.min_turn_radius * (1.0 + gust) ** 2
-        self.radius = radius
-        self.planner = MotionPlanner(vehicle, radius=radius,
-                                     arrival_heading=grid.arrival_heading,
-                                     parallel=self.cfg.parallel, cell_size=grid.cell_size,
-                                     lead=self.cfg.lead, accept=self.cfg.accept,
-                                     mode=self.cfg.planner_mode)
-        interesting = np.zeros(grid.num_cells, dtype=bool)
-        for ids in grid.sensors.values():
-            interesting[ids] = True
-        sorter = make_sorter(self.cfg.sorter, radius=radius,
-                             arrival_heading=grid.arrival_heading, parallel=self.cfg.parallel,
-                             interesting=interesting, seed=self.cfg.seed)
-        xs, ys = grid.centres()
-        p = vehicle.pose()
-        self.iterator = Iterator(grid.cells, xs, ys, sorter, Pose(p.x, p.y, p.course))
+        self._setup_planning()
         # The map's dynamic/derived sensor rules get fresh state for every mission.
         self.bindings = map_rule_bindings(grid, bindings).resolve(
             table.controllable, table.uncontrollable, grid.sensors, grid.num_cells)
         self.alphabet = {canon(a): a for a in table.controllable | table.uncontrollable}
         self.no_next = {a for a in table.uncontrollable if canon(a) in ("n.next", "no.next")}
         self.controller = Controller(table)
-        self.ctx = MissionContext(self)
         self.log: list[LogEntry] = []
         self.photos: list[tuple[float, int, float, float]] = []
         self.arrivals: list[tuple[float, int, float, float]] = []
@@ -310,6 +314,30 @@ class Executor:
         self._steps_since_tick = 0
         self._pass_marks: list[int] = []     # len(arrivals) at the end of each pass
         self._last_track = -1e9
+        self._wall_deadline: float | None = None
+        self.safe_state = ""
+
+    def _setup_planning(self) -> None:
+        """Planner, Sorter and Iterator for the vehicle as it is now (built again once the
+        vehicle is ready: a MAVLink vehicle knows its speed and turn limits only then)."""
+        grid, vehicle = self.grid, self.vehicle
+        radius = self.cfg.turn_radius or planning_radius(vehicle, self.cfg.wind)
+        self.radius = radius
+        self.planner = MotionPlanner(vehicle, radius=radius,
+                                     arrival_heading=grid.arrival_heading,
+                                     parallel=self.cfg.parallel, cell_size=grid.cell_size,
+                                     lead=self.cfg.lead, accept=self.cfg.accept,
+                                     mode=self.cfg.planner_mode)
+        interesting = np.zeros(grid.num_cells, dtype=bool)
+        for ids in grid.sensors.values():
+            interesting[ids] = True
+        sorter = make_sorter(self.cfg.sorter, radius=radius,
+                             arrival_heading=grid.arrival_heading, parallel=self.cfg.parallel,
+                             interesting=interesting, seed=self.cfg.seed)
+        xs, ys = grid.centres()
+        p = vehicle.pose()
+        self.iterator = Iterator(grid.cells, xs, ys, sorter, Pose(p.x, p.y, p.course))
+        self.ctx = MissionContext(self)
 
     # -- bookkeeping ------------------------------------------------------------------------
     def log_entry(self, kind: str, label: str, cell: int = -1) -> None:
@@ -375,13 +403,18 @@ class Executor:
         while v.time < deadline:
             v.advance(self.cfg.tick)
             self._record_track()
+            self._check_wall()
             for e in v.poll_events():
-                self.log_entry("v", e.kind)
+                self.log_entry("v", f"{e.kind} {e.detail}".strip())
                 if e.kind == "takeoff_complete":
                     return
-                if e.kind in ("rejected", "link_lost"):
-                    raise MissionEnd(False, f"take-off failed: {e.kind} {e.detail}")
+                if e.kind in FAULTS:
+                    raise MissionEnd(False, f"take-off failed: {e.kind}: {e.detail}")
         raise MissionEnd(False, "take-off did not complete within 600 s")
+
+    def _check_wall(self) -> None:
+        if self._wall_deadline is not None and time.monotonic() > self._wall_deadline:
+            raise MissionEnd(False, f"wall-clock limit of {self.cfg.max_wall:.0f} s reached")
 
     def _physical_tick(self, dt: float) -> None:
         self.vehicle.advance(dt)
@@ -403,43 +436,78 @@ class Executor:
                                         f"({pe.detail})")
         for e in self.vehicle.poll_events():
             self.log_entry("v", f"{e.kind} {e.detail}".strip())
-            if e.kind == "link_lost":
-                raise MissionEnd(False, f"link lost: {e.detail}; the autopilot's failsafe is in "
-                                        f"charge")
+            if e.kind in FAULTS:
+                raise MissionEnd(False, f"{e.kind}: {e.detail}")
             if e.kind in self._waiting:
                 self._pending.append(self._waiting.pop(e.kind))
 
     def run(self) -> MissionResult:
-        ok, reason = True, "completed"
+        ok, reason, interrupted = True, "completed", False
         v = self.vehicle
+        if self.cfg.max_wall is not None:
+            self._wall_deadline = time.monotonic() + self.cfg.max_wall
         try:
-            has_takeoff = any(b.kind == "takeoff" for b in self.bindings.values())
-            if self.cfg.auto_takeoff and not has_takeoff:
-                self._take_off()
-                p = v.pose()
-                self.iterator.reset(Pose(p.x, p.y, p.course))
-                # Fly on straight until the first go.
-                self.planner.go(p.x + 2000 * math.cos(p.course), p.y + 2000 * math.sin(p.course))
-                self.planner.arrived = True
-            self.t0 = v.time
-            self._loop()
+            try:
+                start = v.prepare(self.cfg.start)
+                self._setup_planning()
+                self.log_entry("x", f"start {start.value}, planning radius {self.radius:.0f} m")
+                has_takeoff = any(b.kind == "takeoff" for b in self.bindings.values())
+                if start is Start.AIRBORNE:
+                    v.take_control()
+                elif self.cfg.auto_takeoff and not has_takeoff:
+                    self._take_off()
+                if start is Start.AIRBORNE or (self.cfg.auto_takeoff and not has_takeoff):
+                    p = v.pose()
+                    self.iterator.reset(Pose(p.x, p.y, p.course))
+                    # Fly on straight until the first go.
+                    self.planner.go(p.x + 2000 * math.cos(p.course),
+                                    p.y + 2000 * math.sin(p.course))
+                    self.planner.arrived = True
+                self.t0 = v.time
+                self._loop()
+            except KeyboardInterrupt:
+                ok, reason, interrupted = False, "interrupted", True
         except MissionEnd as end:
             ok, reason = end.ok, end.reason
-        except BindingError as exc:
-            ok, reason = False, f"binding error: {exc}"
+        except (BindingError, VehicleError) as exc:
+            ok, reason = False, f"{'binding error: ' if isinstance(exc, BindingError) else ''}{exc}"
         if not ok:
             self.log_entry("x", f"safe end: {reason}")
-            if self.cfg.end_action != "none":
-                self.planner.stop()      # stop steering, so the autopilot's mode sticks
-            if self.cfg.end_action == "rtl":
-                v.rtl()
-            elif self.cfg.end_action == "loiter":
-                v.loiter()
+        self.safe_state = self._safe_end(self.cfg.end_action if ok or interrupted
+                                         else self.cfg.fault_action)
         self._record_track(force=True)
         self._progress(force=True)
         return MissionResult(ok, reason, self._summary(ok, reason), self.log,
                              np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
                              self.photos, self.arrivals, self.grid, dict(self.counts))
+
+    def _safe_end(self, action: SafeAction) -> str:
+        """Command ``action`` (see the module docstring); returns what the log and the summary
+        say about the state the vehicle was left in."""
+        v = self.vehicle
+        if v.hands_off:
+            status = "no command: " + v.settle(0.0)
+        elif not v.flying:
+            status = "no command: the vehicle is not flying"
+        elif action is SafeAction.NONE:
+            status = "no command (--on-end/--on-fault none): the last command stays in force"
+        else:
+            self.planner.stop()      # stop steering, so the safe command sticks
+            try:
+                if action is SafeAction.LOITER:
+                    cx, cy = self.grid.centre_point()
+                    v.loiter(cx, cy, v.loiter_radius)
+                elif action is SafeAction.RTL:
+                    v.rtl()
+                else:
+                    v.land()
+                status = f"{action.value} commanded; " + v.settle(3.0)
+            except (VehicleError, KeyboardInterrupt) as exc:
+                status = f"{action.value} failed: {exc}"
+        self.log_entry("x", f"safe state: {status}")
+        if self.cfg.progress:
+            self.cfg.progress(f"safe state: {status}")
+        return status
 
     def _loop(self) -> None:
         # Hot loop (millions of steps per pass on big maps): locals, no per-step clock reads.
@@ -472,6 +540,7 @@ class Executor:
                     self._progress()
                 if v.time - self.t0 > cfg.max_time:
                     raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+                self._check_wall()
             if pending:
                 label = pending.popleft()
                 try:
@@ -526,6 +595,7 @@ class Executor:
                 raise MissionEnd(False, f"controller waits for {exp}, which nothing will produce")
             if v.time - self.t0 > cfg.max_time:
                 raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+            self._check_wall()
             self.settle_compute()
             self._physical_tick(cfg.tick)
             self._mark = perf()
@@ -565,6 +635,8 @@ class Executor:
             "passes": self.counts["passes"], "misses": self.planner.misses,
             "resorts": self.iterator.resorts,
             "compute_s": round(self.compute_s, 4) if not self.cfg.ideal_compute else 0.0,
+            "speed_mps": round(speed, 2), "turn_radius_m": round(self.radius, 1),
+            "vehicle": type(self.vehicle).__name__, "safe_state": self.safe_state,
         }
 
 

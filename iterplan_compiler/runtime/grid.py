@@ -154,6 +154,13 @@ class GridMap:
         col, row = int(cell) % self.cols, int(cell) // self.cols
         return (col + 0.5) * self.cell_size, (row + 0.5) * self.cell_size
 
+    def centre_point(self) -> tuple[float, float]:
+        """Centre of the locations' bounding box (where a finished mission loiters)."""
+        xs, ys = self.centres()
+        if len(xs) == 0:
+            return self.cols * self.cell_size / 2, self.rows * self.cell_size / 2
+        return float(xs.min() + xs.max()) / 2, float(ys.min() + ys.max()) / 2
+
     def cell_at(self, x, y):
         """Cell id containing ENU point(s), or -1 outside the grid rectangle."""
         col = np.floor(np.asarray(x, dtype=np.float64) / self.cell_size).astype(np.int64)

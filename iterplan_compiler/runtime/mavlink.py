@@ -1,130 +1,269 @@
-"""MAVLink vehicle (ArduPlane over pymavlink) and a loopback autopilot for tests.
+"""MAVLink vehicle: ArduPlane over pymavlink, with ArduPilot's companion-computer conventions.
 
-:class:`MavlinkVehicle` implements the :class:`~iterplan_compiler.runtime.vehicle.Vehicle` API:
+:class:`MavlinkVehicle` implements the :class:`~iterplan_compiler.runtime.vehicle.Vehicle` API.
 
-* link: ``mavutil.mavlink_connection(url, source_system=255)`` (a GCS id, so heartbeats feed
-  ArduPlane's GCS failsafe when SYSID_MYGCS = 255); a daemon thread sends HEARTBEAT at 1 Hz (type
-  GCS, autopilot INVALID) even while the plan is busy; all sends share one lock;
-* start-up (:meth:`MavlinkVehicle.connect`): wait for the autopilot's heartbeat, request
-  GLOBAL_POSITION_INT at 10 Hz and GPS_RAW_INT/HEARTBEAT at 1 Hz (SET_MESSAGE_INTERVAL only: the
-  research notes show that is what lets SITL run fast), wait for a 3-D GPS fix;
-* ``arm``: MAV_CMD_COMPONENT_ARM_DISARM; ``takeoff``: PARAM_SET TKOFF_ALT, then TAKEOFF mode (13),
-  ``takeoff_complete`` when the relative altitude is within 2 m of the target;
-* ``goto``: GUIDED (mode 15) then MISSION_ITEM_INT ``current=2`` (frame GLOBAL_RELATIVE_ALT_INT);
-  with a radius, MAV_CMD_DO_REPOSITION as COMMAND_INT with the CHANGE_MODE flag and param3 =
-  radius (ArduPlane answers COMMAND_LONG DO_REPOSITION with UNSUPPORTED);
-* ``steer``: COMMAND_INT MAV_CMD_GUIDED_CHANGE_HEADING (course over ground, lateral acceleration
-  limit); it stays in force until GUIDED is re-entered, which ``goto`` therefore does;
-* ``rtl``/``loiter``: modes RTL (11) / LOITER (12); ``land``: MAV_CMD_DO_LAND_START (needs a
-  landing sequence in the vehicle's mission and RTL_AUTOLAND);
-* events: MISSION_ITEM_REACHED -> ``reached``; failed COMMAND_ACK/MISSION_ACK -> ``rejected``;
-  STATUSTEXT -> ``message``; armed flag -> ``armed``;
-* time is the autopilot's ``time_boot_ms`` (so SITL speed-ups work); ``advance(dt)`` listens until
-  the vehicle clock moved on by ``dt`` (or a wall-time bound passes);
-* link loss: no vehicle heartbeat for ``link_timeout`` wall seconds -> ``link_lost`` once; from
-  then on no commands are sent (heartbeats continue), and the autopilot's own failsafe is in
-  charge — configure FS_GCS_ENABL = 1, FS_LONG_TIMEOUT (5 s), FS_LONG_ACTN = 1 (RTL) and
-  SYSID_MYGCS = 255 on the aircraft.
+Link
+    ``mavutil.mavlink_connection(url, source_system=255)``: a GCS system id, so our heartbeats
+    feed ArduPlane's GCS failsafe when SYSID_MYGCS = 255 (its default).  We beat at 1 Hz of wall
+    time from a daemon thread and at 1 Hz of *vehicle* time from the main loop (SITL speed-ups);
+    all sends share one lock.  Messages we need are requested with SET_MESSAGE_INTERVAL.
 
-:class:`LoopbackAutopilot` runs the built-in simulator behind a MAVLink endpoint on localhost,
-answering the subset above the way ArduPlane does (MISSION_ITEM_INT current=2 only in GUIDED,
-COMMAND_LONG DO_REPOSITION unsupported, MISSION_ITEM_REACHED at the loiter capture), faster than
-real time by ``speedup``.  It exists for tests and demos; it is not an ArduPilot emulator.
+Start-up (:meth:`MavlinkVehicle.connect`, then :meth:`MavlinkVehicle.prepare`)
+    wait for the autopilot's heartbeat; read the parameters the plan depends on
+    (PARAM_REQUEST_READ: AIRSPEED_CRUISE, ROLL_LIMIT_DEG, WP_LOITER_RAD, ... with their pre-4.5
+    names as fall-backs); then wait, bounded by ``ready_timeout``, for a 3-D GPS fix, the home
+    position and the pre-arm-check health bit of SYS_STATUS (a vehicle already flying needs no
+    pre-arm).  A time-out names what is missing and quotes ArduPlane's latest ``PreArm:`` text.
+
+Arming and take-off (blocking, checked)
+    ``arm``: MAV_CMD_COMPONENT_ARM_DISARM, its COMMAND_ACK awaited and the armed flag confirmed
+    by HEARTBEAT; a refusal is retried ``arm_attempts`` times 2 s apart (a check that is still
+    settling), then :class:`~iterplan_compiler.runtime.vehicle.VehicleError` with ArduPlane's
+    reason.  ``takeoff``: PARAM_SET TKOFF_ALT (echo checked), then mode TAKEOFF (confirmed);
+    ``takeoff_complete`` when the relative altitude is within 2 m of it.
+
+Flying
+    ``goto``: MISSION_ITEM_INT ``current=2`` (GUIDED fly-to, frame GLOBAL_RELATIVE_ALT_INT),
+    only while the vehicle is in GUIDED because *we* put it there (entering GUIDED from our own
+    TAKEOFF is a checked mode change); ``loiter(x, y, r)``: MAV_CMD_DO_REPOSITION as COMMAND_INT
+    with param3 = r (COMMAND_LONG is UNSUPPORTED on ArduPlane); ``steer``: GUIDED_CHANGE_HEADING;
+    ``rtl``: mode RTL; ``land``: uploads a landing mission (approach waypoint, NAV_LAND at home)
+    and switches to AUTO; ``landed`` once on the ground or disarmed after landing.
+
+Monitoring (faults, see :data:`~iterplan_compiler.runtime.vehicle.FAULTS`)
+    ``mode_changed``: a HEARTBEAT shows a mode other than the one we set (the pilot or a
+    failsafe took over) -> from then on nothing is sent but heartbeats (:attr:`hands_off`);
+    ``disarmed`` in flight (hands off); ``link_lost``: no autopilot heartbeat for
+    ``link_timeout`` wall seconds (hands off: ArduPlane's failsafe is in charge; configure
+    FS_GCS_ENABL = 1, FS_LONG_ACTN = 1 and SYSID_MYGCS = 255 on the aircraft);
+    ``telemetry_lost``: heartbeats but no GLOBAL_POSITION_INT for ``telemetry_timeout`` wall
+    seconds (the vehicle clock would freeze); ``gps_lost``: no 3-D fix for ``gps_loss_s``;
+    ``rejected``: a failed COMMAND_ACK/MISSION_ACK for a flight command.
+
+Time is the autopilot's ``time_boot_ms`` (so SITL speed-ups work); ``advance(dt)`` listens until
+the vehicle clock moved on by ``dt``, or a wall-time bound passes (a frozen clock cannot hang a
+mission).  Every command sent is recorded in :attr:`MavlinkVehicle.command_log`.
+
+:class:`~iterplan_compiler.runtime.loopback.LoopbackAutopilot` is a fast stand-in peer for unit
+tests; what flies is proven against ArduPilot SITL (``tests/sitl/``).
 """
 
 from __future__ import annotations
 
 import math
 import os
+import statistics
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
-from iterplan_compiler.runtime.grid import LocalFrame, compass_to_math, math_to_compass
-from iterplan_compiler.runtime.sim import SimVehicle
-from iterplan_compiler.runtime.vehicle import Vehicle, VehicleEvent, VehiclePose
+from iterplan_compiler.runtime.grid import LocalFrame, math_to_compass
+from iterplan_compiler.runtime.vehicle import (
+    HANDS_OFF,
+    PLANNING_BANK_DEG,
+    Start,
+    Vehicle,
+    VehicleError,
+    VehicleEvent,
+    VehicleModel,
+    VehiclePose,
+    cruise_true_airspeed,
+)
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402  (after MAVLINK20 so MAVLink 2 is used)
 
 mav = mavutil.mavlink
 
-MODES = {"MANUAL": 0, "CIRCLE": 1, "FBWA": 5, "AUTO": 10, "RTL": 11, "LOITER": 12,
-         "TAKEOFF": 13, "GUIDED": 15}
-MODE_NAMES = {v: k for k, v in MODES.items()}
+#: ArduPlane flight modes (custom_mode numbers), from pymavlink's table.
+MODE_NAMES: dict[int, str] = dict(mavutil.mode_mapping_apm)
+MODES: dict[str, int] = {v: k for k, v in MODE_NAMES.items()}
+
+#: Parameters read at connection: name -> (fall-back name on older firmware, its scale).
+PARAMS: dict[str, tuple[str | None, float]] = {
+    "AIRSPEED_CRUISE": ("TRIM_ARSPD_CM", 0.01),
+    "ROLL_LIMIT_DEG": ("LIM_ROLL_CD", 0.01),
+    "WP_LOITER_RAD": (None, 1.0),
+    "WP_RADIUS": (None, 1.0),
+    "NAVL1_PERIOD": (None, 1.0),
+    "AIRSPEED_MIN": ("ARSPD_FBW_MIN", 1.0),
+    "AIRSPEED_MAX": ("ARSPD_FBW_MAX", 1.0),
+    "TKOFF_ALT": (None, 1.0),
+    "SYSID_MYGCS": (None, 1.0),
+    "FS_GCS_ENABL": (None, 1.0),
+}
+
+#: Commands whose refusal is a fault while flying (others, e.g. message intervals, are logged).
+FLIGHT_COMMANDS = frozenset({mav.MAV_CMD_DO_REPOSITION, mav.MAV_CMD_GUIDED_CHANGE_HEADING,
+                             mav.MAV_CMD_DO_SET_MODE, mav.MAV_CMD_DO_CHANGE_SPEED,
+                             mav.MAV_CMD_COMPONENT_ARM_DISARM, mav.MAV_CMD_DO_SET_MISSION_CURRENT})
 
 
-class MavlinkError(RuntimeError):
+def result_name(result: int) -> str:
+    e = mav.enums["MAV_RESULT"].get(result)
+    return e.name.replace("MAV_RESULT_", "") if e else str(result)
+
+
+@dataclass(frozen=True)
+class LinkConfig:
+    """Time-outs (wall seconds unless said otherwise) and overrides of a MAVLink vehicle."""
+
+    heartbeat_timeout: float = 30.0   # to the first autopilot heartbeat
+    ready_timeout: float = 180.0      # for GPS fix, home and pre-arm checks
+    link_timeout: float = 3.0         # no autopilot heartbeat -> link_lost
+    telemetry_timeout: float = 3.0    # no GLOBAL_POSITION_INT -> telemetry_lost
+    gps_loss_s: float = 1.0           # vehicle seconds without a 3-D fix -> gps_lost
+    command_timeout: float = 3.0      # for an ACK or a mode confirmation
+    arm_attempts: int = 3
+    airspeed: float | None = None     # cruise airspeed to command (DO_CHANGE_SPEED) and plan with
+    loiter_radius: float | None = None  # radius of the end-of-mission loiter (default WP_LOITER_RAD)
+    system_id: int = 255
+    component_id: int = 190
+
+
+class MavlinkError(VehicleError):
     """Connecting to / preparing the vehicle failed (message for the user)."""
 
 
 class MavlinkVehicle(Vehicle):
     """ArduPlane through pymavlink; see the module docstring."""
 
-    def __init__(self, conn, frame: LocalFrame, *, target_system: int = 1,
-                 target_component: int = 1, link_timeout: float = 3.0,
-                 airspeed: float = 18.0, min_turn_radius: float = 35.0,
+    def __init__(self, conn: Any, frame: LocalFrame, config: LinkConfig | None = None,
                  progress: Callable[[str], None] | None = None):
         self.conn = conn
         self.frame = frame
-        self.ts, self.tc = target_system, target_component
-        self.link_timeout = link_timeout
-        self.airspeed = airspeed
-        self.min_turn_radius = min_turn_radius
+        self.cfg = config or LinkConfig()
         self.progress = progress
+        self.ts, self.tc = 1, 1
         self._lock = threading.Lock()
         self._events: list[VehicleEvent] = []
         self._pose = VehiclePose(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self._boot_t = 0.0
-        self._last_hb_wall = time.monotonic()
+        now = time.monotonic()
+        self._last_hb_wall = now
+        self._last_pos_wall = now
+        self._last_beat_t = -1e9
         self._link_ok = True
+        self._hands_off = False
+        self._monitoring = False          # faults are reported once the mission starts
+        self._reported: set[str] = set()
         self.mode = "UNKNOWN"
+        self.expected_mode: str | None = None
+        self._mode_req: tuple[str, str, float] | None = None   # (wanted, previous, wall)
         self.armed = False
         self.fix_type = 0
+        self._nofix_since: float | None = None
+        self.home_amsl: float | None = None
+        self.alt_amsl = 0.0
+        self.prearm_ok = False
+        self.params: dict[str, float] = {}
+        self._acks: dict[int, int] = {}
+        self._mission_acks: list[int] = []
+        self._mission_requests: list[int] = []
         self._takeoff_alt: float | None = None
-        self._last_goto: tuple[float, float, float] | None = None   # x, y, wall time
-        self._last_course: tuple[float, float] | None = None        # course, wall time
+        self._takeoff_done = False
+        self._landing = False
+        self._ground_since: float | None = None
+        self._last_goto: tuple[float, float, float] | None = None   # course, alt, vehicle time
+        self._last_course: tuple[float, float] | None = None
+        self._speeds: deque[float] = deque(maxlen=600)
         self.commands_sent = 0
-        self.statustexts: list[str] = []
+        self.command_log: list[tuple[float, str, str]] = []
+        self.statustexts: deque[str] = deque(maxlen=50)
+        self.model = VehicleModel(18.0, PLANNING_BANK_DEG, 80.0)
+        self._confirmed: Callable[[], bool] = lambda: True   # is the last safe command in force?
         self._stop = threading.Event()
         self._hb = threading.Thread(target=self._heartbeat_loop, daemon=True,
                                     name="iterplan-mavlink-heartbeat")
         self._hb.start()
 
-    # -- connection -------------------------------------------------------------------------
+    # -- connection ---------------------------------------------------------------------------
     @classmethod
-    def connect(cls, url: str, frame: LocalFrame, *, heartbeat_timeout: float = 30.0,
-                gps_timeout: float = 120.0, **kw) -> MavlinkVehicle:
-        """Open ``url``, wait for the autopilot and a GPS fix; raises :class:`MavlinkError`."""
+    def connect(cls, url: str, frame: LocalFrame, config: LinkConfig | None = None,
+                progress: Callable[[str], None] | None = None) -> MavlinkVehicle:
+        """Open ``url``, wait for the autopilot, request telemetry, read parameters; raises
+        :class:`MavlinkError`."""
+        cfg = config or LinkConfig()
         try:
-            conn = mavutil.mavlink_connection(url, source_system=255, source_component=190)
-        except Exception as exc:  # pymavlink raises assorted OSErrors/ValueErrors
+            conn = mavutil.mavlink_connection(url, source_system=cfg.system_id,
+                                              source_component=cfg.component_id)
+        except Exception as exc:  # noqa: BLE001 - pymavlink raises assorted OSErrors/ValueErrors
             raise MavlinkError(f"cannot open {url}: {exc}") from None
-        v = cls(conn, frame, **kw)
-        v._say(f"waiting for a heartbeat on {url}")
-        deadline = time.monotonic() + heartbeat_timeout
-        while time.monotonic() < deadline:
-            v._send_heartbeat()
-            msg = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
-            if msg is not None and msg.get_srcComponent() == 1 and msg.type != mav.MAV_TYPE_GCS:
-                v.ts, v.tc = msg.get_srcSystem(), msg.get_srcComponent()
-                v._handle(msg)
-                break
-        else:
+        v = cls(conn, frame, cfg, progress)
+        try:
+            v._wait_heartbeat(url)
+            v._request_streams()
+            v._read_params()
+            v.model = v._derive_model()
+        except BaseException:
             v.close()
-            raise MavlinkError(f"no autopilot heartbeat on {url} within {heartbeat_timeout:.0f} s")
-        for msg_id, hz in ((mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 10.0),
-                           (mav.MAVLINK_MSG_ID_GPS_RAW_INT, 1.0),
-                           (mav.MAVLINK_MSG_ID_HEARTBEAT, 1.0)):
-            v._command_long(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz)
-        v._say("waiting for a 3-D GPS fix")
-        deadline = time.monotonic() + gps_timeout
-        while v.fix_type < 3:
-            if time.monotonic() > deadline:
-                v.close()
-                raise MavlinkError(f"no GPS fix within {gps_timeout:.0f} s")
-            v._pump(0.2)
+            raise
         return v
+
+    def _wait_heartbeat(self, url: str) -> None:
+        self._say(f"waiting for a heartbeat on {url}")
+        deadline = time.monotonic() + self.cfg.heartbeat_timeout
+        while time.monotonic() < deadline:
+            self._send_heartbeat()
+            msg = self.conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
+            if msg is not None and msg.type not in (mav.MAV_TYPE_GCS,
+                                                    mav.MAV_TYPE_ONBOARD_CONTROLLER) \
+                    and msg.autopilot != mav.MAV_AUTOPILOT_INVALID:
+                self.ts, self.tc = msg.get_srcSystem(), msg.get_srcComponent()
+                self._handle(msg)
+                return
+        raise MavlinkError(f"no autopilot heartbeat on {url} within "
+                           f"{self.cfg.heartbeat_timeout:.0f} s")
+
+    def _request_streams(self) -> None:
+        for msg_id, hz in ((mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 10.0),
+                           (mav.MAVLINK_MSG_ID_GPS_RAW_INT, 2.0),
+                           (mav.MAVLINK_MSG_ID_SYS_STATUS, 1.0),
+                           (mav.MAVLINK_MSG_ID_HOME_POSITION, 0.5),
+                           (mav.MAVLINK_MSG_ID_HEARTBEAT, 2.0)):
+            self._command_long(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz, log=False)
+
+    def _read_params(self, timeout: float = 6.0) -> None:
+        names = list(PARAMS) + [alt for alt, _ in PARAMS.values() if alt]
+        deadline = time.monotonic() + timeout
+        asked = 0.0
+        while time.monotonic() < deadline:
+            missing = [n for n in PARAMS if n not in self.params
+                       and (PARAMS[n][0] is None or PARAMS[n][0] not in self.params)]
+            if not missing:
+                break
+            if time.monotonic() - asked > 2.0:
+                for n in names:
+                    if n not in self.params:
+                        self._send(lambda m, n=n: m.param_request_read_send(
+                            self.ts, self.tc, n.encode(), -1), log=False)
+                asked = time.monotonic()
+            self._pump(0.1)
+
+    def param(self, name: str) -> float | None:
+        """A parameter read at connection (by its current name; older names are converted)."""
+        if name in self.params:
+            return self.params[name]
+        alt, scale = PARAMS.get(name, (None, 1.0))
+        if alt and alt in self.params:
+            return self.params[alt] * scale
+        return None
+
+    def _derive_model(self) -> VehicleModel:
+        """Cruise true airspeed, planning bank and loiter radius from the vehicle's parameters
+        (a command-line ``airspeed``/``loiter_radius`` wins)."""
+        cruise = self.cfg.airspeed or self.param("AIRSPEED_CRUISE")
+        source = "parameters"
+        if cruise is None or cruise <= 0:
+            cruise, source = 18.0, "default (AIRSPEED_CRUISE unreadable)"
+        alt = (self.home_amsl or 0.0) + 60.0
+        tas = cruise_true_airspeed(cruise, alt)
+        roll = self.param("ROLL_LIMIT_DEG") or 45.0
+        loiter = self.cfg.loiter_radius or self.param("WP_LOITER_RAD") or 80.0
+        return VehicleModel(tas, min(roll, PLANNING_BANK_DEG), abs(loiter), source)
 
     def close(self) -> None:
         self._stop.set()
@@ -133,7 +272,7 @@ class MavlinkVehicle(Vehicle):
         except Exception:  # noqa: BLE001 - closing a dead link must not fail a mission report
             pass
 
-    # -- Vehicle API ------------------------------------------------------------------------
+    # -- Vehicle API: state -------------------------------------------------------------------
     @property
     def time(self) -> float:
         return self._boot_t
@@ -142,63 +281,193 @@ class MavlinkVehicle(Vehicle):
         return self._pose
 
     @property
+    def airspeed(self) -> float:  # type: ignore[override]
+        """Cruise speed: the measured median ground speed in GUIDED once known, else the
+        parameters' true airspeed."""
+        if len(self._speeds) >= 20:
+            return float(statistics.median(self._speeds))
+        return self.model.airspeed
+
+    @property
+    def min_turn_radius(self) -> float:  # type: ignore[override]
+        return self.model.min_turn_radius
+
+    @property
+    def loiter_radius(self) -> float:
+        return self.model.loiter_radius
+
+    @property
     def link_ok(self) -> bool:
         return self._link_ok
 
+    @property
+    def hands_off(self) -> bool:
+        return self._hands_off
+
+    @property
+    def flying(self) -> bool:
+        return self.armed and self._pose.alt > 10.0 and self._pose.groundspeed > 5.0
+
+    # -- Vehicle API: start-up ----------------------------------------------------------------
+    def prepare(self, start: Start) -> Start:
+        """Wait (bounded) for GPS fix, home and pre-arm checks; see the module docstring."""
+        deadline = time.monotonic() + self.cfg.ready_timeout
+        next_say = next_home = 0.0
+        while True:
+            missing = self._not_ready(start)
+            if not missing:
+                break
+            now = time.monotonic()
+            if now > deadline:
+                why = self._autopilot_says()
+                raise MavlinkError(f"vehicle not ready after {self.cfg.ready_timeout:.0f} s: "
+                                   f"waiting for {', '.join(missing)}{why}")
+            if now >= next_home and "home position" in missing:
+                self._command_long(mav.MAV_CMD_REQUEST_MESSAGE,
+                                   mav.MAVLINK_MSG_ID_HOME_POSITION, log=False)
+                next_home = now + 2.0
+            if now >= next_say:
+                self._say(f"waiting for {', '.join(missing)}{self._autopilot_says()}")
+                next_say = now + 10.0
+            self._pump(0.1)
+        start = super().prepare(start)
+        self.model = self._derive_model()        # home altitude is known now
+        self._monitoring = True
+        self._say(f"ready ({'flying' if self.flying else 'on the ground'}, mode {self.mode}); "
+                  f"cruise {self.model.airspeed:.1f} m/s TAS, planning bank "
+                  f"{self.model.bank_limit_deg:.0f} deg, loiter radius "
+                  f"{self.model.loiter_radius:.0f} m")
+        return start
+
+    def _not_ready(self, start: Start) -> list[str]:
+        missing = []
+        if self.fix_type < 3:
+            missing.append(f"a 3-D GPS fix (fix type {self.fix_type})")
+        if self.home_amsl is None:
+            missing.append("the home position")
+        if not self.prearm_ok and not (start is not Start.GROUND and self.flying):
+            missing.append("the pre-arm checks")
+        return missing
+
+    def _autopilot_says(self) -> str:
+        for text in reversed(self.statustexts):
+            if text.startswith(("PreArm", "Arm", "AHRS", "EKF", "GPS")):
+                return f" (autopilot: {text!r})"
+        return ""
+
     def arm(self) -> None:
-        self._command_long(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        """Arm, checked (see the module docstring); raises :class:`MavlinkError`."""
+        if self.armed:
+            return
+        cmd = mav.MAV_CMD_COMPONENT_ARM_DISARM
+        result = -1
+        for attempt in range(1, self.cfg.arm_attempts + 1):
+            result = self._command_sync(cmd, 1)
+            if result == mav.MAV_RESULT_ACCEPTED and self._wait_until(lambda: self.armed):
+                self._monitoring = True
+                return
+            if attempt < self.cfg.arm_attempts:
+                self._say(f"arming refused ({result_name(result)}{self._autopilot_says()}); "
+                          f"retrying in 2 s")
+                self._wait_until(lambda: False, 2.0)
+        raise MavlinkError(f"arming refused by the autopilot ({result_name(result)})"
+                           f"{self._autopilot_says()}")
 
     def takeoff(self, alt: float) -> None:
+        self._set_param("TKOFF_ALT", float(alt))
         self._takeoff_alt = float(alt)
-        self._send(lambda m: m.param_set_send(self.ts, self.tc, b"TKOFF_ALT", float(alt),
-                                              mav.MAV_PARAM_TYPE_REAL32))
-        self._set_mode("TAKEOFF")
+        self._takeoff_done = False
+        self._request_mode("TAKEOFF")
 
-    def goto(self, x, y, alt=None, radius=None) -> None:
-        now = time.monotonic()
-        if self._last_goto and radius is None:
-            lx, ly, lt = self._last_goto
-            # Re-sending an unchanged target floods the link; refresh at most every second.
-            if math.hypot(x - lx, y - ly) < 5.0 and now - lt < 1.0:
+    def take_control(self) -> None:
+        self._enter_guided()
+
+    # -- Vehicle API: flying ------------------------------------------------------------------
+    def goto(self, x: float, y: float, alt: float | None = None,
+             radius: float | None = None) -> None:
+        if not self._may_fly():
+            return
+        if radius:
+            self.loiter(x, y, radius)
+            return
+        p = self._pose
+        course = math.atan2(y - p.y, x - p.x)
+        z = float(alt if alt is not None else (self._takeoff_alt or p.alt or 60.0))
+        if self._last_goto is not None:
+            lc, lz, lt = self._last_goto
+            # A carrot moves with the aircraft: re-send when its bearing changed, or every
+            # second of vehicle time (not wall time: SITL runs faster than real time).
+            if abs(math.remainder(course - lc, 2 * math.pi)) < math.radians(3) \
+                    and abs(z - lz) < 1 and self._boot_t - lt < 1.0:
                 return
-        self._last_goto = (x, y, now)
+        self._last_goto = (course, z, self._boot_t)
         self._last_course = None
         lat, lon = self.frame.to_latlon(x, y)
-        z = float(alt if alt is not None else (self._takeoff_alt or self._pose.alt or 60.0))
-        if radius:
-            self._send(lambda m: m.command_int_send(
-                self.ts, self.tc, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                mav.MAV_CMD_DO_REPOSITION, 0, 0, -1, mav.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
-                float(radius), 0, int(lat * 1e7), int(lon * 1e7), z))
-            return
-        if self.mode != "GUIDED":
-            self._set_mode("GUIDED")
         self._send(lambda m: m.mission_item_int_send(
             self.ts, self.tc, 0, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, mav.MAV_CMD_NAV_WAYPOINT,
-            2, 0, 0, 0, 0, 0, int(lat * 1e7), int(lon * 1e7), z))
+            2, 0, 0, 0, 0, 0, int(lat * 1e7), int(lon * 1e7), z),
+            detail=f"goto {x:.0f} {y:.0f} {z:.0f}")
 
     def steer(self, course: float) -> None:
-        now = time.monotonic()
+        if not self._may_fly():
+            return
         if self._last_course:
             lc, lt = self._last_course
-            if abs(math.remainder(course - lc, 2 * math.pi)) < math.radians(2) and now - lt < 1:
+            if abs(math.remainder(course - lc, 2 * math.pi)) < math.radians(2) \
+                    and self._boot_t - lt < 1.0:
                 return
-        if self.mode != "GUIDED":
-            self._set_mode("GUIDED")
-        self._last_course = (course, now)
+        self._last_course = (course, self._boot_t)
         self._last_goto = None
         self._send(lambda m: m.command_int_send(
             self.ts, self.tc, 0, mav.MAV_CMD_GUIDED_CHANGE_HEADING, 0, 0,
-            0, math_to_compass(course), 10.0, 0, 0, 0, 0))
+            0, math_to_compass(course), 10.0, 0, 0, 0, 0), detail=f"steer {course:.2f}")
+
+    def loiter(self, x: float | None = None, y: float | None = None,
+               radius: float | None = None) -> None:
+        if self._hands_off:
+            return
+        if x is None or y is None:
+            self._request_mode("LOITER", wait=False)
+            return
+        r = float(radius or self.model.loiter_radius)
+        lat, lon = self.frame.to_latlon(x, y)
+        z = float(self._takeoff_alt or self._pose.alt or 60.0)
+        self.expected_mode = "GUIDED"
+        self._mode_req = ("GUIDED", self.mode, time.monotonic())
+        self._acks.pop(mav.MAV_CMD_DO_REPOSITION, None)
+        self._confirmed = lambda: self._acks.get(mav.MAV_CMD_DO_REPOSITION) \
+            == mav.MAV_RESULT_ACCEPTED and self.mode == "GUIDED"
+        self._send(lambda m: m.command_int_send(
+            self.ts, self.tc, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            mav.MAV_CMD_DO_REPOSITION, 0, 0, -1, mav.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE,
+            r, 0, int(lat * 1e7), int(lon * 1e7), z), detail=f"loiter {x:.0f} {y:.0f} r {r:.0f}")
 
     def rtl(self) -> None:
-        self._set_mode("RTL")
-
-    def loiter(self) -> None:
-        self._set_mode("LOITER")
+        if not self._hands_off:
+            self._request_mode("RTL", wait=False)
 
     def land(self) -> None:
-        self._command_long(mav.MAV_CMD_DO_LAND_START)
+        """Upload a landing mission (approach waypoint 600 m out on the aircraft's side of home,
+        NAV_LAND at home) and fly it in AUTO; ``landed`` follows."""
+        if self._hands_off:
+            return
+        p = self._pose
+        d = math.hypot(p.x, p.y) or 1.0
+        home = self.frame.to_latlon(0.0, 0.0)
+        ax, ay = 600.0 * p.x / d, 600.0 * p.y / d
+        approach = self.frame.to_latlon(ax, ay)
+        items = [(mav.MAV_CMD_NAV_WAYPOINT, home, 0.0),
+                 (mav.MAV_CMD_NAV_WAYPOINT, approach, 40.0),
+                 (mav.MAV_CMD_NAV_LAND, home, 0.0)]
+        try:
+            self._upload_mission(items)
+            result = self._command_sync(mav.MAV_CMD_DO_SET_MISSION_CURRENT, 1)
+            if result != mav.MAV_RESULT_ACCEPTED:
+                raise MavlinkError(f"landing: mission start refused ({result_name(result)})")
+            self._landing = True
+            self._request_mode("AUTO")
+        except MavlinkError as exc:
+            self._emit("rejected", str(exc))
 
     def advance(self, dt: float) -> None:
         """Listen until the autopilot clock moved on by ``dt`` (wall-bounded)."""
@@ -206,15 +475,25 @@ class MavlinkVehicle(Vehicle):
         wall_end = time.monotonic() + max(dt, 0.05) * 1.5 + 0.05
         while self._boot_t < target and time.monotonic() < wall_end:
             self._pump(0.02)
-        self._check_link()
+        self._check()
 
     def poll_events(self) -> list[VehicleEvent]:
         self._pump(0.0)
-        self._check_link()
+        self._check()
         ev, self._events = self._events, []
         return ev
 
-    # -- internals ----------------------------------------------------------------------------
+    def settle(self, timeout: float = 3.0) -> str:
+        """Wait for the last safe command to be confirmed (mode shown by HEARTBEAT, or the
+        DO_REPOSITION ACK)."""
+        if self._hands_off:
+            return "no command sent: " + ("link lost" if not self._link_ok else
+                                          f"vehicle in {self.mode}, not under iterplan's control")
+        want = self.expected_mode
+        ok = self._wait_until(self._confirmed, timeout)
+        return f"vehicle in {self.mode}" + ("" if ok else f" (wanted {want}, not confirmed)")
+
+    # -- internals: commands ------------------------------------------------------------------
     def _say(self, text: str) -> None:
         if self.progress:
             self.progress(f"mavlink: {text}")
@@ -222,12 +501,37 @@ class MavlinkVehicle(Vehicle):
     def _emit(self, kind: str, detail: str = "") -> None:
         self._events.append(VehicleEvent(self._boot_t, kind, detail))
 
-    def _send(self, fn) -> None:
-        if not self._link_ok:
-            return  # after link loss the autopilot's failsafe is in charge: no commands
+    def _fault(self, kind: str, detail: str) -> None:
+        if not self._monitoring or kind in self._reported:
+            return
+        self._reported.add(kind)
+        if kind in HANDS_OFF:
+            self._hands_off = True
+        self._emit(kind, detail)
+        self._say(f"{kind}: {detail}")
+
+    def _may_fly(self) -> bool:
+        """Fly-to/steer commands go out only in the GUIDED mode we set ourselves."""
+        if self._hands_off:
+            return False
+        if self.expected_mode in (None, "TAKEOFF") and not self._landing:
+            self._enter_guided()
+        return self.expected_mode == "GUIDED" and self.mode == "GUIDED"
+
+    def _enter_guided(self) -> None:
+        self._request_mode("GUIDED")
+        self._monitoring = True
+        if self.cfg.airspeed:
+            self._command_long(mav.MAV_CMD_DO_CHANGE_SPEED, 0, float(self.cfg.airspeed), -1)
+
+    def _send(self, fn: Callable[[Any], None], *, detail: str = "", log: bool = True) -> None:
+        if self._hands_off and log:
+            return   # somebody else is in charge: no commands at all
         with self._lock:
             fn(self.conn.mav)
-        self.commands_sent += 1
+        if log:
+            self.commands_sent += 1
+            self.command_log.append((self._boot_t, detail.split(" ")[0], detail))
 
     def _send_heartbeat(self) -> None:
         with self._lock:
@@ -241,244 +545,247 @@ class MavlinkVehicle(Vehicle):
             except Exception:  # noqa: BLE001 - socket closed underneath us: just stop
                 return
 
-    def _command_long(self, cmd: int, *params: float) -> None:
+    def _command_long(self, cmd: int, *params: float, log: bool = True) -> None:
         p = list(params) + [0.0] * (7 - len(params))
-        self._send(lambda m: m.command_long_send(self.ts, self.tc, cmd, 0, *p))
+        name = mav.enums["MAV_CMD"][cmd].name.replace("MAV_CMD_", "").lower() \
+            if cmd in mav.enums["MAV_CMD"] else str(cmd)
+        self._send(lambda m: m.command_long_send(self.ts, self.tc, cmd, 0, *p),
+                   detail=f"{name} {' '.join(f'{v:g}' for v in params)}", log=log)
 
-    def _set_mode(self, name: str) -> None:
+    def _command_sync(self, cmd: int, *params: float) -> int:
+        """Send a COMMAND_LONG and wait for its ACK; returns the MAV_RESULT (-1: no answer)."""
+        self._acks.pop(cmd, None)
+        self._command_long(cmd, *params)
+        self._wait_until(lambda: cmd in self._acks)
+        return self._acks.get(cmd, -1)
+
+    def _wait_until(self, cond: Callable[[], bool], timeout: float | None = None) -> bool:
+        deadline = time.monotonic() + (self.cfg.command_timeout if timeout is None else timeout)
+        while not cond():
+            if time.monotonic() > deadline:
+                return False
+            self._pump(0.05)
+        return True
+
+    def _request_mode(self, name: str, wait: bool = True) -> None:
+        """Ask for mode ``name``; with ``wait``, raise :class:`MavlinkError` unless HEARTBEAT
+        confirms it within ``command_timeout``."""
+        if self._hands_off:
+            return
+        self.expected_mode = name
+        self._mode_req = (name, self.mode, time.monotonic())
+        self._acks.pop(mav.MAV_CMD_DO_SET_MODE, None)
+        self._confirmed = lambda: self.mode == name
         self._command_long(mav.MAV_CMD_DO_SET_MODE, mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
                            MODES[name])
-        self.mode = name  # optimistic; corrected by the next HEARTBEAT
+        if not wait:
+            return
+        ok = self._wait_until(lambda: self.mode == name
+                              or self._acks.get(mav.MAV_CMD_DO_SET_MODE, 0) > 0)
+        if self.mode == name:
+            self._mode_req = None
+            return
+        res = self._acks.get(mav.MAV_CMD_DO_SET_MODE)
+        why = f"refused ({result_name(res)})" if ok and res else "not confirmed"
+        raise MavlinkError(f"mode change to {name} {why}; the vehicle is in {self.mode}"
+                           f"{self._autopilot_says()}")
 
+    def _set_param(self, name: str, value: float) -> None:
+        self.params.pop(name, None)
+        self._send(lambda m: m.param_set_send(self.ts, self.tc, name.encode(), value,
+                                              mav.MAV_PARAM_TYPE_REAL32),
+                   detail=f"param_set {name} {value:g}")
+        if not self._wait_until(lambda: name in self.params) \
+                or abs(self.params[name] - value) > 1e-3 * max(1.0, abs(value)):
+            raise MavlinkError(f"setting {name} = {value:g} was not confirmed by the autopilot")
+
+    def _upload_mission(self, items: list[tuple[int, tuple[float, float], float]]) -> None:
+        """MISSION_COUNT / MISSION_REQUEST(_INT) / MISSION_ITEM_INT / MISSION_ACK handshake."""
+        self._mission_acks.clear()
+        self._mission_requests.clear()
+        self._send(lambda m: m.mission_count_send(self.ts, self.tc, len(items)),
+                   detail=f"mission_count {len(items)}")
+        sent: set[int] = set()
+        deadline = time.monotonic() + 10.0
+        while not self._mission_acks:
+            if time.monotonic() > deadline:
+                raise MavlinkError("landing: mission upload timed out")
+            self._pump(0.05)
+            while self._mission_requests:
+                seq = self._mission_requests.pop(0)
+                if not 0 <= seq < len(items):
+                    continue
+                cmd, (lat, lon), alt = items[seq]
+                frame = mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT if seq else mav.MAV_FRAME_GLOBAL_INT
+                self._send(lambda m, s=seq, c=cmd, la=lat, lo=lon, z=alt, f=frame:
+                           m.mission_item_int_send(self.ts, self.tc, s, f, c, 0, 1, 0, 0, 0, 0,
+                                                   int(la * 1e7), int(lo * 1e7), z),
+                           detail=f"mission_item {seq}")
+                sent.add(seq)
+        if self._mission_acks[-1] != mav.MAV_MISSION_ACCEPTED:
+            raise MavlinkError(f"landing: mission refused ({self._mission_acks[-1]})")
+
+    # -- internals: receiving -----------------------------------------------------------------
     def _pump(self, timeout: float) -> None:
         first = True
         while True:
             msg = self.conn.recv_match(blocking=first and timeout > 0, timeout=timeout or None)
             first = False
             if msg is None:
-                return
+                break
             self._handle(msg)
+        if self._boot_t - self._last_beat_t >= 1.0:   # 1 Hz of vehicle time, too
+            self._last_beat_t = self._boot_t
+            self._send_heartbeat()
 
-    def _check_link(self) -> None:
-        age = time.monotonic() - self._last_hb_wall
-        if self._link_ok and age > self.link_timeout:
+    def _check(self) -> None:
+        now = time.monotonic()
+        age = now - self._last_hb_wall
+        if self._link_ok and age > self.cfg.link_timeout:
             self._link_ok = False
-            self._emit("link_lost", f"no autopilot heartbeat for {age:.1f} s")
-            self._say("link lost; commands stopped, the autopilot's failsafe takes over")
+            self._monitoring = self._monitoring or self.armed
+            self._fault("link_lost", f"no autopilot heartbeat for {age:.1f} s; the autopilot's "
+                                     f"failsafe is in charge")
+        pos_age = now - self._last_pos_wall
+        if self._link_ok and pos_age > self.cfg.telemetry_timeout:
+            self._fault("telemetry_lost", f"heartbeats but no position for {pos_age:.1f} s")
+        if self._nofix_since is not None and self._boot_t - self._nofix_since \
+                >= self.cfg.gps_loss_s:
+            self._fault("gps_lost", f"no 3-D GPS fix for {self._boot_t - self._nofix_since:.1f}"
+                                    f" s (fix type {self.fix_type})")
+        req = self._mode_req
+        if req and not self._hands_off and now - req[2] > self.cfg.command_timeout:
+            self._mode_req = None
+            if self.mode != req[0]:
+                self._fault("rejected", f"mode change to {req[0]} not confirmed; the vehicle "
+                                        f"is in {self.mode}")
 
-    def _handle(self, msg) -> None:
+    def _handle(self, msg: Any) -> None:
         t = msg.get_type()
-        if msg.get_srcSystem() != self.ts and t != "BAD_DATA":
+        if t == "BAD_DATA" or msg.get_srcSystem() != self.ts:
             return
-        if t == "HEARTBEAT":
-            if msg.type == mav.MAV_TYPE_GCS:
-                return
-            self._last_hb_wall = time.monotonic()
-            if not self._link_ok:
-                self._link_ok = True
-                self._emit("link_restored")
-            self.mode = MODE_NAMES.get(msg.custom_mode, str(msg.custom_mode))
-            armed = bool(msg.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
-            if armed and not self.armed:
-                self._emit("armed")
-            self.armed = armed
-        elif t == "GLOBAL_POSITION_INT":
-            self._boot_t = max(self._boot_t, msg.time_boot_ms / 1000.0)
-            x, y = self.frame.to_enu(msg.lat / 1e7, msg.lon / 1e7)
-            vn, ve = msg.vx / 100.0, msg.vy / 100.0
-            alt = msg.relative_alt / 1000.0
-            self._pose = VehiclePose(self._boot_t, x, y, alt, math.atan2(vn, ve),
-                                     math.hypot(vn, ve))
-            if self._takeoff_alt is not None and alt >= self._takeoff_alt - 2.0:
-                self._takeoff_alt_reached()
-        elif t == "GPS_RAW_INT":
-            self.fix_type = msg.fix_type
-        elif t == "MISSION_ITEM_REACHED":
-            self._emit("reached", f"seq {msg.seq}")
-        elif t == "COMMAND_ACK":
-            if msg.result not in (mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_IN_PROGRESS):
-                self._emit("rejected", f"command {msg.command} result {msg.result}")
-        elif t == "MISSION_ACK":
-            if msg.type != mav.MAV_MISSION_ACCEPTED:
-                self._emit("rejected", f"mission item refused ({msg.type})")
-        elif t == "STATUSTEXT":
-            text = msg.text if isinstance(msg.text, str) else msg.text.decode(errors="replace")
-            self.statustexts.append(text)
-            self._emit("message", text)
+        handler = _HANDLERS.get(t)
+        if handler is not None:
+            handler(self, msg)
 
-    def _takeoff_alt_reached(self) -> None:
-        if not getattr(self, "_takeoff_done", False):
+    def _on_heartbeat(self, msg: Any) -> None:
+        if msg.get_srcComponent() != self.tc or msg.type in (mav.MAV_TYPE_GCS,
+                                                             mav.MAV_TYPE_ONBOARD_CONTROLLER):
+            return
+        self._last_hb_wall = time.monotonic()
+        if not self._link_ok:
+            self._link_ok = True
+            self._emit("link_restored")
+        mode = MODE_NAMES.get(msg.custom_mode, str(msg.custom_mode))
+        self.mode = mode
+        req = self._mode_req
+        if req and mode == req[0]:
+            self._mode_req = None
+        elif self.expected_mode and mode != self.expected_mode and not self._hands_off:
+            # Tolerate the old mode while our own request is in flight; anything else is the
+            # pilot or a failsafe.
+            if not (req and mode == req[1]):
+                self._fault("mode_changed", f"flight mode changed to {mode} (iterplan set "
+                                            f"{self.expected_mode}): the pilot or a failsafe "
+                                            f"took over; iterplan stopped commanding")
+        armed = bool(msg.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
+        if armed and not self.armed:
+            self._emit("armed")
+        if self.armed and not armed:
+            if self._landing:
+                self._landed("disarmed after landing")
+            else:
+                self._fault("disarmed", "the vehicle was disarmed")
+        self.armed = armed
+
+    def _on_position(self, msg: Any) -> None:
+        self._last_pos_wall = time.monotonic()
+        self._boot_t = max(self._boot_t, msg.time_boot_ms / 1000.0)
+        x, y = self.frame.to_enu(msg.lat / 1e7, msg.lon / 1e7)
+        vn, ve = msg.vx / 100.0, msg.vy / 100.0
+        alt = msg.relative_alt / 1000.0
+        self.alt_amsl = msg.alt / 1000.0
+        gs = math.hypot(vn, ve)
+        self._pose = VehiclePose(self._boot_t, x, y, alt, math.atan2(vn, ve), gs)
+        if self.mode == "GUIDED" and self.armed and alt > 20.0:
+            self._speeds.append(gs)
+        if self._takeoff_alt is not None and not self._takeoff_done \
+                and self.mode == "TAKEOFF" and alt >= self._takeoff_alt - 2.0:
             self._takeoff_done = True
-            self._emit("takeoff_complete", f"alt {self._pose.alt:.0f} m")
+            self._emit("takeoff_complete", f"alt {alt:.0f} m")
+        if self._landing:
+            if alt < 2.0 and gs < 1.5:
+                self._ground_since = self._ground_since if self._ground_since is not None \
+                    else self._boot_t
+                if self._boot_t - self._ground_since >= 2.0:
+                    self._landed(f"on the ground {math.hypot(x, y):.0f} m from home")
+            else:
+                self._ground_since = None
 
+    def _landed(self, detail: str) -> None:
+        if self._landing:
+            self._landing = False
+            self.expected_mode = None
+            self._emit("landed", detail)
 
-class LoopbackAutopilot:
-    """The built-in simulator speaking (a subset of) ArduPlane's MAVLink on localhost.
+    def _on_gps(self, msg: Any) -> None:
+        self.fix_type = msg.fix_type
+        if msg.fix_type >= 3:
+            self._nofix_since = None
+        elif self._nofix_since is None and self._monitoring:
+            self._nofix_since = self._boot_t
 
-    ``url`` is the listening side, e.g. ``udpin:127.0.0.1:14561``; the vehicle connects with
-    ``udpout:127.0.0.1:14561``.  Runs in a daemon thread; :meth:`silence` stops all output (for
-    link-loss tests); :meth:`stop` ends it.  ``speedup`` simulated seconds pass per wall second.
-    """
+    def _on_sys_status(self, msg: Any) -> None:
+        bit = mav.MAV_SYS_STATUS_PREARM_CHECK
+        present = msg.onboard_control_sensors_present & bit
+        self.prearm_ok = bool(msg.onboard_control_sensors_health & bit) or not present
 
-    def __init__(self, url: str, frame: LocalFrame, sim: SimVehicle, *, speedup: float = 20.0,
-                 gps_delay: float = 2.0, system_id: int = 1):
-        self.frame = frame
-        self.sim = sim
-        self.speedup = speedup
-        self.gps_delay = gps_delay
-        self.conn = mavutil.mavlink_connection(url, source_system=system_id, source_component=1)
-        self.mode = "MANUAL"
-        self.tkoff_alt = 50.0
-        self.received: list[str] = []
-        self.silent = False
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True,
-                                        name="iterplan-loopback-autopilot")
+    def _on_home(self, msg: Any) -> None:
+        self.home_amsl = msg.altitude / 1000.0
 
-    def start(self) -> LoopbackAutopilot:
-        self._thread.start()
-        return self
+    def _on_param(self, msg: Any) -> None:
+        pid = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        self.params[pid.rstrip("\x00")] = float(msg.param_value)
 
-    def stop(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=5)
-        self.conn.close()
-
-    def silence(self) -> None:
-        """Simulate a dead link: stop sending anything (the sim keeps flying)."""
-        self.silent = True
-
-    # -- internals ----------------------------------------------------------------------------
-    def _custom_mode(self) -> int:
-        return MODES.get(self.mode, 0)
-
-    def _run(self) -> None:
-        last = time.monotonic()
-        next_hb = next_pos = next_gps = 0.0
-        connected = False
-        while not self._stop.is_set():
-            now = time.monotonic()
-            self.sim.advance(min(now - last, 0.2) * self.speedup)
-            last = now
-            while True:
-                msg = self.conn.recv_match(blocking=False)
-                if msg is None:
-                    break
-                connected = True
-                self._handle(msg)
-            if self.mode == "TAKEOFF" and self.sim.mode == "GUIDED":
-                self.mode = "LOITER"     # ArduPlane's TAKEOFF mode loiters when done, too
-            for e in self.sim.poll_events():
-                if e.kind == "reached" and connected and not self.silent:
-                    self.conn.mav.mission_item_reached_send(0)
-            t = self.sim.time
-            if connected and not self.silent:
-                if t >= next_hb:
-                    base = mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (
-                        mav.MAV_MODE_FLAG_SAFETY_ARMED if self.sim.armed else 0)
-                    self.conn.mav.heartbeat_send(mav.MAV_TYPE_FIXED_WING,
-                                                 mav.MAV_AUTOPILOT_ARDUPILOTMEGA, base,
-                                                 self._custom_mode(), mav.MAV_STATE_ACTIVE)
-                    next_hb = t + 1.0
-                if t >= next_pos:
-                    self._send_position()
-                    next_pos = t + 0.1
-                if t >= next_gps:
-                    fix = 3 if t >= self.gps_delay else 1
-                    lat, lon = self.frame.to_latlon(self.sim.x, self.sim.y)
-                    self.conn.mav.gps_raw_int_send(int(t * 1e6), fix, int(lat * 1e7),
-                                                   int(lon * 1e7), 0, 100, 100, 0, 0, 10)
-                    next_gps = t + 1.0
-            time.sleep(0.002)
-
-    def _send_position(self) -> None:
-        p = self.sim.pose()
-        lat, lon = self.frame.to_latlon(p.x, p.y)
-        vn = p.groundspeed * math.sin(p.course)
-        ve = p.groundspeed * math.cos(p.course)
-        hdg = int(math_to_compass(p.course) * 100) % 36000
-        self.conn.mav.global_position_int_send(int(p.t * 1000), int(lat * 1e7), int(lon * 1e7),
-                                               int(p.alt * 1000), int(p.alt * 1000),
-                                               int(vn * 100), int(ve * 100), 0, hdg)
-
-    def _ack(self, cmd: int, result: int) -> None:
-        self.conn.mav.command_ack_send(cmd, result)
-
-    def _set_mode(self, custom: int) -> bool:
-        name = MODE_NAMES.get(int(custom))
-        if name is None:
-            return False
-        self.mode = name
-        s = self.sim
-        if name == "TAKEOFF":
-            if not s.armed:
-                self.mode = "MANUAL"
-                return False
-            s.takeoff(self.tkoff_alt)
-        elif name == "RTL":
-            s.rtl()
-        elif name == "LOITER":
-            s.loiter()
-        elif name == "GUIDED" and s.mode not in ("GUIDED", "COURSE"):
-            s.loiter()
-        return True
-
-    def _handle(self, msg) -> None:
-        t = msg.get_type()
-        if t in ("HEARTBEAT", "BAD_DATA"):
+    def _on_command_ack(self, msg: Any) -> None:
+        self._acks[msg.command] = msg.result
+        if msg.result in (mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_IN_PROGRESS):
             return
-        self.received.append(t)
-        ok, unsupported = mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_UNSUPPORTED
-        if t == "COMMAND_LONG":
-            cmd = msg.command
-            if cmd == mav.MAV_CMD_COMPONENT_ARM_DISARM:
-                if msg.param1 == 1:
-                    self.sim.arm()
-                else:
-                    self.sim.armed = False
-                self._ack(cmd, ok)
-            elif cmd == mav.MAV_CMD_DO_SET_MODE:
-                self._ack(cmd, ok if self._set_mode(msg.param2) else mav.MAV_RESULT_FAILED)
-            elif cmd == mav.MAV_CMD_SET_MESSAGE_INTERVAL:
-                self._ack(cmd, ok)
-            elif cmd == mav.MAV_CMD_DO_LAND_START:
-                self.mode = "AUTO"
-                self.sim.land()
-                self._ack(cmd, ok)
-            else:   # includes DO_REPOSITION as COMMAND_LONG, like ArduPlane
-                self._ack(cmd, unsupported)
-        elif t == "COMMAND_INT":
-            cmd = msg.command
-            if cmd == mav.MAV_CMD_DO_REPOSITION:
-                if msg.param2 and int(msg.param2) & mav.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE:
-                    self.mode = "GUIDED"
-                if self.mode != "GUIDED":
-                    self._ack(cmd, mav.MAV_RESULT_FAILED)
-                    return
-                x, y = self.frame.to_enu(msg.x / 1e7, msg.y / 1e7)
-                self.sim.goto(x, y, radius=msg.param3 if msg.param3 > 0 else None)
-                self._ack(cmd, ok)
-            elif cmd == mav.MAV_CMD_GUIDED_CHANGE_HEADING:
-                if self.mode != "GUIDED":
-                    self._ack(cmd, mav.MAV_RESULT_FAILED)
-                    return
-                self.sim.steer(compass_to_math(msg.param2))
-                self._ack(cmd, ok)
-            else:
-                self._ack(cmd, unsupported)
-        elif t == "MISSION_ITEM_INT":
-            if msg.current == 2 and self.mode == "GUIDED":
-                x, y = self.frame.to_enu(msg.x / 1e7, msg.y / 1e7)
-                self.sim.goto(x, y)
-                self.conn.mav.mission_ack_send(msg.get_srcSystem(), msg.get_srcComponent(),
-                                               mav.MAV_MISSION_ACCEPTED)
-            else:
-                self.conn.mav.mission_ack_send(msg.get_srcSystem(), msg.get_srcComponent(),
-                                               mav.MAV_MISSION_ERROR)
-        elif t == "PARAM_SET":
-            pid = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
-            if pid.rstrip("\x00") == "TKOFF_ALT":
-                self.tkoff_alt = float(msg.param_value)
-            self.conn.mav.param_value_send(msg.param_id.encode() if isinstance(msg.param_id, str)
-                                           else msg.param_id, msg.param_value,
-                                           mav.MAV_PARAM_TYPE_REAL32, 1, 0)
+        if msg.command in FLIGHT_COMMANDS and self._monitoring:
+            name = mav.enums["MAV_CMD"][msg.command].name if msg.command in mav.enums["MAV_CMD"] \
+                else str(msg.command)
+            self._fault("rejected", f"{name} refused ({result_name(msg.result)})"
+                                    f"{self._autopilot_says()}")
+
+    def _on_mission_ack(self, msg: Any) -> None:
+        self._mission_acks.append(msg.type)
+        if msg.type != mav.MAV_MISSION_ACCEPTED and self.expected_mode == "GUIDED" \
+                and not self._landing:
+            self._fault("rejected", f"fly-to refused (MISSION_ACK {msg.type})")
+
+    def _on_mission_request(self, msg: Any) -> None:
+        self._mission_requests.append(msg.seq)
+
+    def _on_statustext(self, msg: Any) -> None:
+        text = msg.text if isinstance(msg.text, str) else msg.text.decode(errors="replace")
+        self.statustexts.append(text)
+        self._emit("message", text)
+
+    def _on_reached(self, msg: Any) -> None:
+        self._emit("reached", f"seq {msg.seq}")
+
+
+_HANDLERS: dict[str, Callable[[MavlinkVehicle, Any], None]] = {
+    "HEARTBEAT": MavlinkVehicle._on_heartbeat,
+    "GLOBAL_POSITION_INT": MavlinkVehicle._on_position,
+    "GPS_RAW_INT": MavlinkVehicle._on_gps,
+    "SYS_STATUS": MavlinkVehicle._on_sys_status,
+    "HOME_POSITION": MavlinkVehicle._on_home,
+    "PARAM_VALUE": MavlinkVehicle._on_param,
+    "COMMAND_ACK": MavlinkVehicle._on_command_ack,
+    "MISSION_ACK": MavlinkVehicle._on_mission_ack,
+    "MISSION_REQUEST": MavlinkVehicle._on_mission_request,
+    "MISSION_REQUEST_INT": MavlinkVehicle._on_mission_request,
+    "STATUSTEXT": MavlinkVehicle._on_statustext,
+    "MISSION_ITEM_REACHED": MavlinkVehicle._on_reached,
+}

@@ -24,9 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from iterplan_compiler.runtime.vehicle import Vehicle, VehicleEvent, VehiclePose, wrap_pi
-
-G = 9.80665
+from iterplan_compiler.runtime.vehicle import G, Vehicle, VehicleEvent, VehiclePose, wrap_pi
 
 
 @dataclass(frozen=True)
@@ -54,6 +52,38 @@ class SimParams:
     def min_turn_radius(self) -> float:
         phi = math.radians(self.bank_limit_deg)
         return self.airspeed ** 2 / (G * math.tan(phi) * self.turn_efficiency)
+
+    @classmethod
+    def from_arduplane(cls, params: dict[str, float], *, home_amsl: float = 584.0,
+                       altitude: float = 60.0, **overrides: float) -> SimParams:
+        """The simulator calibrated to ArduPlane SITL's plane model with these parameters
+        (AIRSPEED_CRUISE, ROLL_LIMIT_DEG, WP_LOITER_RAD, NAVL1_PERIOD, NAVL1_DAMPING,
+        RLL2SRV_TCONST; missing ones take the SITL plane.parm values).  Calibration
+        (``benchmarks/sitl_vs_sim.py``, docs/runtime.md): SITL flies
+        :data:`SITL_SPEED_FACTOR` faster over ground than AIRSPEED_CRUISE x EAS2TAS, and turns
+        with :data:`SITL_TURN_EFFICIENCY` of the ideal ``g tan(bank) / V`` rate."""
+        from iterplan_compiler.runtime.vehicle import cruise_true_airspeed
+
+        def get(name: str, default: float) -> float:
+            return float(params.get(name, default))
+
+        kw: dict[str, float] = {
+            "airspeed": cruise_true_airspeed(get("AIRSPEED_CRUISE", 22.0), home_amsl + altitude)
+            * SITL_SPEED_FACTOR,
+            "bank_limit_deg": get("ROLL_LIMIT_DEG", 65.0),
+            "loiter_radius": abs(get("WP_LOITER_RAD", 80.0)),
+            "l1_period": get("NAVL1_PERIOD", 15.0),
+            "l1_damping": get("NAVL1_DAMPING", 0.75),
+            "bank_tau": get("RLL2SRV_TCONST", 0.25),
+            "turn_efficiency": SITL_TURN_EFFICIENCY,
+        }
+        kw.update(overrides)
+        return cls(**kw)  # type: ignore[arg-type]
+
+
+#: Calibration against ArduPlane SITL (see :meth:`SimParams.from_arduplane`).
+SITL_SPEED_FACTOR = 1.03
+SITL_TURN_EFFICIENCY = 0.75
 
 
 class SimVehicle(Vehicle):
@@ -143,15 +173,32 @@ class SimVehicle(Vehicle):
         self.radius = self.p.loiter_radius
         self.captured = False
 
-    def loiter(self) -> None:
+    def loiter(self, x: float | None = None, y: float | None = None,
+               radius: float | None = None) -> None:
         if self.mode in ("IDLE", "LANDED"):
             return
-        # Circle a point one radius to the right of the current track.
-        r = self.p.loiter_radius
+        r = float(radius) if radius else self.p.loiter_radius
         self.mode = "GUIDED"
-        self.target = (self.x + r * math.sin(self.psi), self.y - r * math.cos(self.psi))
         self.radius = r
-        self.captured = True
+        if x is None or y is None:
+            # Circle a point one radius to the right of the current track.
+            self.target = (self.x + r * math.sin(self.psi), self.y - r * math.cos(self.psi))
+            self.captured = True
+        else:
+            self.target = (float(x), float(y))
+            self.captured = False
+
+    @property
+    def loiter_radius(self) -> float:
+        return self.p.loiter_radius
+
+    @property
+    def bank_limit_deg(self) -> float:
+        return self.p.bank_limit_deg
+
+    @property
+    def flying(self) -> bool:
+        return self.armed and self.mode not in ("IDLE", "LANDED") and self.alt > 5.0
 
     def advance(self, dt: float) -> None:
         """Integrate ``dt`` seconds (any non-negative value; the last step is shortened)."""

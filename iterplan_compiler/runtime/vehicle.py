@@ -15,13 +15,23 @@ Commands (all non-blocking; their outcome arrives as :class:`VehicleEvent`):
 ``steer(course)``
     Hold a course over ground (ArduPlane GUIDED_CHANGE_HEADING): the motion planner flies its own
     Dubins paths with it.
-``rtl()``, ``land()``, ``loiter()``
-    Return home and circle / land at home (``landed``) / circle where it is.
+``rtl()``, ``land()``, ``loiter(x=None, y=None, radius=None)``
+    Return home and circle / land at home (``landed``) / circle ``(x, y)`` (default: where it
+    is) at ``radius`` (default: the vehicle's loiter radius).
 ``advance(dt)``
     Let ``dt`` seconds of vehicle time pass (simulated, or by listening to the link).
 
-Events: ``armed``, ``takeoff_complete``, ``reached``, ``landed``, ``link_lost``,
-``link_restored``, ``rejected`` (a command was refused), ``message`` (status text).
+Events: ``armed``, ``takeoff_complete``, ``reached``, ``landed``, ``link_restored``,
+``message`` (status text), and the *faults* of :data:`FAULTS`, after which the runtime stops
+flying the plan: ``link_lost`` (no autopilot heartbeat), ``telemetry_lost`` (heartbeats but no
+position), ``gps_lost`` (no 3-D fix), ``mode_changed`` (the pilot or a failsafe changed the
+flight mode away from the one the runtime set), ``disarmed`` (disarmed in flight), ``rejected``
+(the autopilot refused a command).  After ``link_lost``, ``mode_changed`` and ``disarmed``
+somebody else is in charge (the autopilot's failsafe, the pilot): the vehicle then sends no more
+commands at all (:attr:`Vehicle.hands_off`).
+
+Blocking start-up steps that can fail (waiting for the autopilot to be ready, arming, a mode
+change) raise :class:`VehicleError` with a message for the user.
 """
 
 from __future__ import annotations
@@ -29,6 +39,88 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from enum import Enum
+
+G = 9.80665
+
+#: Event kinds after which the mission cannot go on.
+FAULTS = frozenset({"link_lost", "telemetry_lost", "gps_lost", "mode_changed", "disarmed",
+                    "rejected"})
+#: Faults after which somebody else (pilot, autopilot failsafe) is in charge: no more commands.
+HANDS_OFF = frozenset({"link_lost", "mode_changed", "disarmed"})
+
+
+class VehicleError(RuntimeError):
+    """A start-up step or command failed; the message is meant for the user."""
+
+
+class Start(Enum):
+    """How a mission begins: ``ground`` arms and takes off, ``airborne`` takes over a vehicle
+    that is already flying, ``auto`` picks by what the vehicle reports (armed and flying)."""
+
+    AUTO = "auto"
+    GROUND = "ground"
+    AIRBORNE = "airborne"
+
+
+class SafeAction(Enum):
+    """What the runtime commands when it stops flying the plan (``--on-end``/``--on-fault``):
+    ``loiter`` circles the map centre at the loiter radius, ``rtl`` returns home (and circles
+    there, ArduPlane's RTL), ``land`` lands at home, ``none`` leaves the last command in force."""
+
+    LOITER = "loiter"
+    RTL = "rtl"
+    LAND = "land"
+    NONE = "none"
+
+
+@dataclass(frozen=True)
+class VehicleModel:
+    """What the planner and the Sorter need to know about the aircraft.
+
+    ``airspeed``: cruise speed over ground without wind, i.e. true airspeed (m/s);
+    ``bank_limit_deg``: the bank the autopilot may use; ``loiter_radius``: the radius it circles
+    a fly-to target at (ArduPlane WP_LOITER_RAD).  :attr:`min_turn_radius` is the tightest
+    coordinated turn, ``V^2 / (g tan(bank))``."""
+
+    airspeed: float
+    bank_limit_deg: float
+    loiter_radius: float
+    source: str = "default"
+
+    @property
+    def min_turn_radius(self) -> float:
+        return turn_radius(self.airspeed, self.bank_limit_deg)
+
+
+def turn_radius(speed: float, bank_deg: float) -> float:
+    """Radius (m) of a coordinated level turn at ``speed`` (m/s) and ``bank_deg``."""
+    return speed * speed / (G * math.tan(math.radians(bank_deg)))
+
+
+#: Planning uses at most this bank: ArduPlane's L1 path following rarely commands more, and
+#: paths planned with the full ROLL_LIMIT_DEG (65 in SITL) cannot be followed.
+PLANNING_BANK_DEG = 45.0
+#: Planned turns are this much wider than the tightest turn at the planning bank (margin for
+#: the autopilot's roll-in lag and path-following error).
+PLANNING_MARGIN = 1.4
+
+
+def planning_radius(vehicle: Vehicle, wind: float = 0.0) -> float:
+    """The default Dubins radius of the planner and the Sorter for ``vehicle``:
+    ``PLANNING_MARGIN x`` the larger of its tightest turn and the turn at
+    ``PLANNING_BANK_DEG``, grown for an expected ``wind`` (m/s) to what the aircraft can fly
+    over ground downwind, ``x ((V + wind) / V)^2``."""
+    v = max(vehicle.airspeed, 1.0)
+    r = max(vehicle.min_turn_radius, turn_radius(v, PLANNING_BANK_DEG))
+    return PLANNING_MARGIN * r * (1.0 + max(0.0, wind) / v) ** 2
+
+
+def cruise_true_airspeed(cruise_eas: float, alt_amsl: float) -> float:
+    """ArduPlane holds AIRSPEED_CRUISE as equivalent airspeed; the true airspeed at
+    ``alt_amsl`` metres (ISA troposphere) is what the aircraft covers per second in still air."""
+    ratio = max(1e-3, 1.0 - 2.25577e-5 * alt_amsl) ** 4.2559
+    return cruise_eas / math.sqrt(ratio)
 
 
 @dataclass(frozen=True)
@@ -86,7 +178,8 @@ class Vehicle(ABC):
     def land(self) -> None: ...
 
     @abstractmethod
-    def loiter(self) -> None: ...
+    def loiter(self, x: float | None = None, y: float | None = None,
+               radius: float | None = None) -> None: ...
 
     @abstractmethod
     def advance(self, dt: float) -> None: ...
@@ -97,6 +190,37 @@ class Vehicle(ABC):
     @property
     def link_ok(self) -> bool:
         return True
+
+    @property
+    def hands_off(self) -> bool:
+        """True once somebody else is in charge (see :data:`HANDS_OFF`): no commands go out."""
+        return False
+
+    @property
+    def loiter_radius(self) -> float:
+        return 80.0
+
+    @property
+    def flying(self) -> bool:
+        """Armed and in the air (an ``airborne`` start needs it)."""
+        return False
+
+    def prepare(self, start: Start) -> Start:
+        """Get ready for a mission (wait for the autopilot, GPS, home, pre-arm checks); returns
+        how the mission starts (``ground`` or ``airborne``).  Raises :class:`VehicleError`."""
+        if start is Start.AIRBORNE and not self.flying:
+            raise VehicleError("--start airborne, but the vehicle is not flying")
+        if start is Start.AUTO:
+            return Start.AIRBORNE if self.flying else Start.GROUND
+        return start
+
+    def take_control(self) -> None:  # noqa: B027 - optional hook
+        """An airborne start: put the vehicle in the mode the runtime commands in."""
+
+    def settle(self, timeout: float = 3.0) -> str:
+        """After a safe command: wait up to ``timeout`` wall seconds for the vehicle to confirm
+        it; returns a one-line status for the log."""
+        return "ok"
 
     @property
     def is_simulated(self) -> bool:

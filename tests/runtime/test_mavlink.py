@@ -1,21 +1,29 @@
-"""MAVLink vehicle against the loopback autopilot (the simulator speaking MAVLink on localhost),
-and an opt-in flight against ArduPilot SITL (set ITERPLAN_SITL to its endpoint)."""
+"""MavlinkVehicle against the loopback autopilot (the simulator speaking MAVLink on localhost):
+fast checks of the start-up sequence, the checked commands and fault detection.  What flies is
+proven against real ArduPlane SITL in tests/sitl/."""
 
+import json
 import math
-import os
+import shutil
 import socket
 import time
+from pathlib import Path
 
 import pytest
 
+from iterplan_compiler.cli import main
 from iterplan_compiler.runtime.executor import Executor, RunConfig
 from iterplan_compiler.runtime.grid import load_map
-from iterplan_compiler.runtime.mavlink import LoopbackAutopilot, MavlinkError, MavlinkVehicle, mav
+from iterplan_compiler.runtime.loopback import LoopbackAutopilot
+from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkError, MavlinkVehicle, mav
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
+from iterplan_compiler.runtime.vehicle import SafeAction, Start
 from tests.runtime.fire_patrol import TABLE
 
 MAP = {"name": "mavlink-test", "cols": 6, "rows": 5, "home": {"cell": "A1"},
        "sensors": {"inP": ["B2", "D4", "F1"], "fire": ["D4"]}}
+FAST = LinkConfig(heartbeat_timeout=10, ready_timeout=20, link_timeout=2.0,
+                  telemetry_timeout=2.0, command_timeout=2.0)
 
 
 def free_port() -> int:
@@ -24,16 +32,21 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def start_peer(grid, **kw):
+    port = free_port()
+    sim = SimVehicle(SimParams(), home=grid.home)
+    kw.setdefault("gps_delay", 1.0)
+    kw.setdefault("prearm_delay", 3.0)
+    peer = LoopbackAutopilot(f"udpin:127.0.0.1:{port}", grid.frame, sim, speedup=25.0,
+                             **kw).start()
+    return peer, sim, f"udpout:127.0.0.1:{port}"
+
+
 @pytest.fixture
 def link():
     grid = load_map(data=MAP)
-    port = free_port()
-    sim = SimVehicle(SimParams(), home=grid.home)
-    peer = LoopbackAutopilot(f"udpin:127.0.0.1:{port}", grid.frame, sim, speedup=25.0,
-                             gps_delay=1.0).start()
-    v = MavlinkVehicle.connect(f"udpout:127.0.0.1:{port}", grid.frame, heartbeat_timeout=10,
-                               gps_timeout=20, airspeed=sim.airspeed, link_timeout=6.0,
-                               min_turn_radius=sim.min_turn_radius)
+    peer, sim, url = start_peer(grid)
+    v = MavlinkVehicle.connect(url, grid.frame, FAST)
     yield grid, sim, peer, v
     v.close()
     peer.stop()
@@ -50,119 +63,178 @@ def wait_for(v, kind, limit=120.0):
     raise AssertionError(f"no {kind} event")
 
 
-def test_connect_arm_takeoff_goto_and_reached(link):
+def airborne(link):
     grid, sim, peer, v = link
-    assert v.fix_type >= 3 and v.time > 0
-    assert "COMMAND_LONG" in peer.received          # SET_MESSAGE_INTERVAL requests
+    assert v.prepare(Start.AUTO) is Start.GROUND
     v.arm()
-    wait_for(v, "armed", 10)
     v.takeoff(40)
     wait_for(v, "takeoff_complete", 60)
-    assert abs(v.pose().alt - sim.alt) < 3 and sim.alt >= 37
-    # Position telemetry is converted back to ENU.
+    v.goto(900.0, 900.0)         # enters GUIDED (our own change from TAKEOFF)
+    v.advance(1)
+    assert v.mode == "GUIDED" and peer.mode == "GUIDED"
+    return grid, sim, peer, v
+
+
+def test_parameters_give_the_vehicle_model(link):
+    grid, sim, peer, v = link
+    assert v.param("AIRSPEED_CRUISE") == 22.0 and v.param("WP_LOITER_RAD") == 80.0
+    v.prepare(Start.GROUND)
+    # 22 m/s EAS at 584 + 60 m AMSL is ~22.7 m/s TAS; planning bank capped at 45 deg.
+    assert 22.5 < v.model.airspeed < 23.0
+    assert v.model.bank_limit_deg == 45.0 and v.loiter_radius == 80.0
+    assert abs(v.min_turn_radius - v.model.airspeed ** 2 / 9.80665) < 1e-6
+
+
+def test_old_parameter_names_are_converted():
+    grid = load_map(data=MAP)
+    params = {"TRIM_ARSPD_CM": 1700.0, "LIM_ROLL_CD": 4000.0, "WP_LOITER_RAD": 60.0}
+    peer, sim, url = start_peer(grid, params=params)
+    v = MavlinkVehicle.connect(url, grid.frame, FAST)
+    try:
+        assert v.param("AIRSPEED_CRUISE") == 17.0 and v.param("ROLL_LIMIT_DEG") == 40.0
+        assert v.model.bank_limit_deg == 40.0 and v.model.loiter_radius == 60.0
+    finally:
+        v.close()
+        peer.stop()
+
+
+def test_start_up_waits_for_pre_arm_then_arms_and_takes_off(link):
+    grid, sim, peer, v = link
+    # The loopback refuses arming for 3 s (pre-arm bit clear), like ArduPlane.
+    v._command_sync(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    assert peer.arm_refusals == 1
+    assert v.prepare(Start.AUTO) is Start.GROUND and v.prearm_ok and v.fix_type >= 3
+    v.arm()
+    assert v.armed and peer.arm_refusals == 1      # armed at the first try once ready
+    v.takeoff(40)
+    assert peer.params["TKOFF_ALT"] == 40 and peer.mode == "TAKEOFF"
+    wait_for(v, "takeoff_complete", 60)
+    assert sim.alt >= 37
+
+
+def test_ready_timeout_names_what_is_missing():
+    grid = load_map(data=MAP)
+    peer, sim, url = start_peer(grid, gps_delay=1e9)
+    v = MavlinkVehicle.connect(url, grid.frame, LinkConfig(ready_timeout=1.5))
+    try:
+        with pytest.raises(MavlinkError, match="3-D GPS fix.*pre-arm checks"):
+            v.prepare(Start.AUTO)
+    finally:
+        v.close()
+        peer.stop()
+
+
+def test_refused_arm_is_an_error_not_a_wait(link):
+    grid, sim, peer, v = link
+    v.prepare(Start.GROUND)
+    peer.prearm_delay = 1e9       # the autopilot now refuses every arm
+    with pytest.raises(MavlinkError, match="arming refused.*TEMPORARILY_REJECTED.*PreArm"):
+        v.arm()
+    assert peer.arm_refusals == FAST.arm_attempts and not sim.armed
+
+
+def test_guided_fly_to_steer_reposition_and_rtl(link):
+    grid, sim, peer, v = airborne(link)
+    e = wait_for(v, "reached", 200)
+    assert e.detail == "seq 0" and math.hypot(sim.x - 900, sim.y - 900) < 250
     p = v.pose()
     assert abs(p.x - sim.x) < 25 and abs(p.y - sim.y) < 25
-    v.goto(900.0, 900.0)
-    assert "MISSION_ITEM_INT" in peer.received or True
-    e = wait_for(v, "reached", 200)
-    assert e.detail == "seq 0"
-    assert math.hypot(sim.x - 900, sim.y - 900) < 250
-    # Course hold via GUIDED_CHANGE_HEADING.
-    v.steer(0.0)                                     # due east
+    v.steer(0.0)                                     # due east (GUIDED_CHANGE_HEADING)
     v.advance(20)
     assert abs(math.remainder(v.pose().course, 2 * math.pi)) < 0.2
-    # DO_REPOSITION with a radius goes out as COMMAND_INT and is accepted.
-    v.goto(0.0, 0.0, radius=60)
-    v.advance(2)
+    v.loiter(0.0, 0.0, 60)                           # DO_REPOSITION as COMMAND_INT
+    assert "ok" not in v.settle(2.0) and sim.radius == 60
     assert not [e for e in v.poll_events() if e.kind == "rejected"]
-    assert sim.radius == 60
+    v.rtl()
+    assert v.settle(2.0) == "vehicle in RTL" and sim.mode == "RTL"
+    names = [c for _, c, _ in v.command_log]
+    assert {"goto", "steer", "loiter", "do_set_mode"} <= set(names)
+
+
+def test_pilot_mode_change_stops_all_commands(link):
+    grid, sim, peer, v = airborne(link)
+    peer.pilot_mode("RTL")
+    e = wait_for(v, "mode_changed", 10)
+    assert "RTL" in e.detail and v.hands_off
+    sent = v.commands_sent
+    v.goto(100.0, 100.0)
+    v.steer(1.0)
+    v.loiter(0.0, 0.0, 50)
     v.rtl()
     v.advance(2)
-    assert v.mode == "RTL" and sim.mode == "RTL"
+    assert v.commands_sent == sent and peer.mode == "RTL"     # never re-enters GUIDED
 
 
-def test_mission_item_outside_guided_is_refused(link):
-    grid, sim, peer, v = link
-    v.mode = "GUIDED"   # pretend: the vehicle is really in MANUAL, so the peer refuses
-    v.goto(100.0, 100.0)
-    v.advance(1)
-    assert any(e.kind == "rejected" for e in v.poll_events())
-    # And COMMAND_LONG DO_REPOSITION is unsupported, as on ArduPlane.
-    v._command_long(mav.MAV_CMD_DO_REPOSITION, -1, 1, 0, 0, 0, 0, 50)
-    v.advance(1)
-    assert any("result 3" in e.detail for e in v.poll_events() if e.kind == "rejected")
-
-
-def test_link_loss_stops_commands(link):
-    grid, sim, peer, v = link
-    peer.silence()
-    lost = None
-    end = time.monotonic() + 20
-    while lost is None and time.monotonic() < end:
-        v.advance(0.5)
-        lost = next((e for e in v.poll_events() if e.kind == "link_lost"), None)
-    assert lost is not None and not v.link_ok
-    sent = v.commands_sent
-    v.goto(500.0, 500.0)
-    v.steer(1.0)
+def test_our_own_mode_changes_are_not_overrides(link):
+    grid, sim, peer, v = airborne(link)
     v.rtl()
-    assert v.commands_sent == sent                   # nothing issued after the loss
+    v.advance(3)
+    assert not [e for e in v.poll_events() if e.kind == "mode_changed"] and not v.hands_off
 
 
-def test_fire_patrol_over_mavlink(link, tmp_path):
+@pytest.mark.parametrize("fault, inject", [
+    ("link_lost", lambda peer: peer.silence()),
+    ("telemetry_lost", lambda peer: peer.freeze_position()),
+    ("gps_lost", lambda peer: setattr(peer, "gps_fix", 1)),
+    ("disarmed", lambda peer: peer.disarm()),
+])
+def test_faults_are_detected(link, fault, inject):
+    grid, sim, peer, v = airborne(link)
+    inject(peer)
+    t0 = time.monotonic()
+    e = wait_for(v, fault, 60)
+    assert time.monotonic() - t0 < 5.0, e
+    assert v.hands_off == (fault in ("link_lost", "disarmed"))
+
+
+def test_fire_patrol_over_mavlink_ends_loitering_over_the_map(link):
     grid, sim, peer, v = link
     cfg = RunConfig(planner_mode="carrot", tick=0.5, altitude=40)
     r = Executor(TABLE, grid, v, config=cfg).run()
     assert r.ok, r.reason
     assert sorted(c for _, c, _, _ in r.arrivals) == sorted(grid.sensors["inP"].tolist())
     assert [c for _, c, _, _ in r.photos] == grid.sensors["fire"].tolist()
-    r.write_geojson(tmp_path / "track.geojson")
+    assert r.summary["safe_state"].startswith("loiter commanded")
+    assert sim.target == pytest.approx(grid.centre_point(), abs=0.01) and sim.radius == 80
+
+
+def test_fault_mid_mission_ends_with_rtl(link):
+    grid, sim, peer, v = link
+    n = {"go": 0}
+
+    def on_event(kind, label):
+        n["go"] += label == "go.next"
+        if n["go"] == 2:
+            peer.gps_fix = 1
+        return False
+    cfg = RunConfig(planner_mode="carrot", tick=0.5, altitude=40, on_event=on_event,
+                    fault_action=SafeAction.RTL)
+    r = Executor(TABLE, grid, v, config=cfg).run()
+    assert not r.ok and r.reason.startswith("gps_lost")
+    assert r.summary["safe_state"] == "rtl commanded; vehicle in RTL" and sim.mode == "RTL"
 
 
 def test_connect_timeout():
     grid = load_map(data=MAP)
     with pytest.raises(MavlinkError, match="no autopilot heartbeat"):
         MavlinkVehicle.connect(f"udpout:127.0.0.1:{free_port()}", grid.frame,
-                               heartbeat_timeout=1.0)
-
-
-@pytest.mark.skipif(not os.environ.get("ITERPLAN_SITL"),
-                    reason="set ITERPLAN_SITL to a running ArduPlane SITL endpoint, "
-                           "e.g. tcp:127.0.0.1:5760")
-def test_sitl_fire_patrol():
-    grid = load_map(data={**MAP, "origin": [-35.363261, 149.165230]})
-    v = MavlinkVehicle.connect(os.environ["ITERPLAN_SITL"], grid.frame, airspeed=23.5,
-                               min_turn_radius=40.0)
-    try:
-        cfg = RunConfig(planner_mode="carrot", tick=0.5, altitude=60, max_time=1800)
-        r = Executor(TABLE, grid, v, config=cfg).run()
-        assert r.ok, r.reason
-        assert sorted(c for _, c, _, _ in r.arrivals) == sorted(grid.sensors["inP"].tolist())
-    finally:
-        v.rtl()
-        v.close()
+                               LinkConfig(heartbeat_timeout=1.0))
 
 
 def test_iterc_run_over_mavlink(tmp_path, capsys):
-    import json
-    import shutil
-    from pathlib import Path
-
-    from iterplan_compiler.cli import main
-
     grid = load_map(data=MAP)
     (tmp_path / "map.json").write_text(json.dumps(MAP))
     shutil.copy(Path(__file__).parent / "fire_patrol.py", tmp_path / "ctl.py")
-    port = free_port()
-    peer = LoopbackAutopilot(f"udpin:127.0.0.1:{port}", grid.frame,
-                             SimVehicle(SimParams(), home=grid.home), speedup=25.0,
-                             gps_delay=1.0).start()
+    peer, sim, url = start_peer(grid)
     try:
         rc = main(["run", str(tmp_path / "ctl.py"), "--map", str(tmp_path / "map.json"),
-                   "--vehicle", "mavlink", "--connect", f"udpout:127.0.0.1:{port}",
+                   "--vehicle", "mavlink", "--connect", url,
                    "--out", str(tmp_path / "out"), "--no-plot"])
     finally:
         peer.stop()
     cap = capsys.readouterr()
     assert rc == 0, cap.err
     assert "visited 3 cells, 1 photos" in cap.out and "mavlink: waiting" in cap.err
+    assert "safe state: loiter commanded" in cap.out
+    rows = (tmp_path / "out" / "commands.csv").read_text().splitlines()
+    assert rows[0] == "t,command,detail" and any(",goto," in r for r in rows)
