@@ -196,11 +196,19 @@ def _photo(ctx: MissionContext, label: str) -> None:
 
 
 def _takeoff(ctx: MissionContext, label: str) -> None:
+    if ctx.vehicle.flying:           # an airborne start: nothing to do, answered at once
+        ctx.note("already airborne: take-off skipped")
+        ctx.done_now("takeoff_complete")
+        return
     ctx.vehicle.arm()
     ctx.vehicle.takeoff(ctx.altitude)
 
 
 def _land(ctx: MissionContext, label: str) -> None:
+    if not ctx.vehicle.flying:
+        ctx.note("not flying: landing skipped")
+        ctx.done_now("landed")
+        return
     ctx.planner.stop()   # otherwise the next planner update steers the aircraft out of LAND
     ctx.vehicle.land()
 

@@ -239,6 +239,7 @@ class MissionContext:
         self.altitude = executor.altitude
         self.target_cell: int | None = None
         self.last_arrival: int | None = None
+        self.done: set[str] = set()
 
     def predicted_pose(self) -> Pose:
         """Where the vehicle will be when the current leg ends: the arrival pose of the active
@@ -273,6 +274,11 @@ class MissionContext:
 
     def note(self, text: str) -> None:
         self._ex.log_entry("x", text)
+
+    def done_now(self, kind: str) -> None:
+        """The durative action just started is already complete (e.g. ``takeoff`` while
+        airborne): its answer follows at once instead of waiting for the vehicle event."""
+        self.done.add(kind)
 
 
 class MissionEnd(Exception):
@@ -315,6 +321,7 @@ class Executor:
         self._pass_marks: list[int] = []     # len(arrivals) at the end of each pass
         self._last_track = -1e9
         self._wall_deadline: float | None = None
+        self._started = False
         self.safe_state = ""
 
     def _setup_planning(self) -> None:
@@ -464,6 +471,7 @@ class Executor:
                                     p.y + 2000 * math.sin(p.course))
                     self.planner.arrived = True
                 self.t0 = v.time
+                self._started = True
                 self._loop()
             except KeyboardInterrupt:
                 ok, reason, interrupted = False, "interrupted", True
@@ -576,7 +584,11 @@ class Executor:
                     else:
                         self._answer(out)
                 if b.completes_on and b.answer:
-                    self._waiting[b.completes_on] = b.answer
+                    if b.completes_on in ctx.done:        # completed already (airborne start)
+                        ctx.done.discard(b.completes_on)
+                        pending.append(b.answer)
+                    else:
+                        self._waiting[b.completes_on] = b.answer
                 counts["steps"] += 1
                 counts["controllable"] += 1
                 if b.kind in progress_kinds:
@@ -603,7 +615,7 @@ class Executor:
             self._progress()
 
     def _summary(self, ok: bool, reason: str) -> dict:
-        duration = self.vehicle.time - self.t0
+        duration = self.vehicle.time - self.t0 if self._started else 0.0
         tr = np.asarray(self.track, dtype=np.float64).reshape(-1, 4)
         # Distance flown during the mission proper (after the controller started).
         m = tr[:, 0] >= 0

@@ -147,6 +147,7 @@ class MavlinkVehicle(Vehicle):
         self._last_pos_wall = now
         self._last_beat_t = -1e9
         self._link_ok = True
+        self._dead = False                # the connection itself failed
         self._hands_off = False
         self._monitoring = False          # faults are reported once the mission starts
         self._reported: set[str] = set()
@@ -317,6 +318,9 @@ class MavlinkVehicle(Vehicle):
             missing = self._not_ready(start)
             if not missing:
                 break
+            if self._dead:
+                raise MavlinkError("lost the connection to the autopilot while waiting for it "
+                                   "to get ready")
             now = time.monotonic()
             if now > deadline:
                 why = self._autopilot_says()
@@ -525,25 +529,45 @@ class MavlinkVehicle(Vehicle):
             self._command_long(mav.MAV_CMD_DO_CHANGE_SPEED, 0, float(self.cfg.airspeed), -1)
 
     def _send(self, fn: Callable[[Any], None], *, detail: str = "", log: bool = True) -> None:
-        if self._hands_off and log:
+        if (self._hands_off and log) or self._dead:
             return   # somebody else is in charge: no commands at all
-        with self._lock:
-            fn(self.conn.mav)
+        try:
+            with self._lock:
+                fn(self.conn.mav)
+        except OSError as exc:
+            self._link_dead(exc)
+            return
         if log:
             self.commands_sent += 1
             self.command_log.append((self._boot_t, detail.split(" ")[0], detail))
 
     def _send_heartbeat(self) -> None:
-        with self._lock:
-            self.conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0,
-                                         mav.MAV_STATE_ACTIVE)
+        if self._dead:
+            return
+        try:
+            with self._lock:
+                self.conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0,
+                                             mav.MAV_STATE_ACTIVE)
+        except OSError as exc:
+            self._link_dead(exc)
 
     def _heartbeat_loop(self) -> None:
-        while not self._stop.wait(1.0):
+        while not self._stop.wait(1.0) and not self._dead:
             try:
                 self._send_heartbeat()
             except Exception:  # noqa: BLE001 - socket closed underneath us: just stop
                 return
+
+    def _link_dead(self, exc: BaseException) -> None:
+        """The connection itself failed (TCP reset, serial unplugged): link loss, at once."""
+        if self._dead:
+            return
+        self._dead = True
+        self._link_ok = False
+        self._monitoring = self._monitoring or self.armed
+        self._fault("link_lost", f"connection failed ({exc.strerror or exc}); the autopilot's "
+                                 f"failsafe is in charge" if isinstance(exc, OSError)
+                    else f"connection failed ({exc})")
 
     def _command_long(self, cmd: int, *params: float, log: bool = True) -> None:
         p = list(params) + [0.0] * (7 - len(params))
@@ -564,6 +588,8 @@ class MavlinkVehicle(Vehicle):
         while not cond():
             if time.monotonic() > deadline:
                 return False
+            if self._dead:
+                raise MavlinkError("lost the connection to the autopilot")
             self._pump(0.05)
         return True
 
@@ -628,8 +654,14 @@ class MavlinkVehicle(Vehicle):
     # -- internals: receiving -----------------------------------------------------------------
     def _pump(self, timeout: float) -> None:
         first = True
-        while True:
-            msg = self.conn.recv_match(blocking=first and timeout > 0, timeout=timeout or None)
+        while not self._dead:
+            try:
+                msg = self.conn.recv_match(blocking=first and timeout > 0,
+                                           timeout=timeout or None)
+            except OSError as exc:
+                self._link_dead(exc)
+                time.sleep(min(timeout, 0.05))
+                return
             first = False
             if msg is None:
                 break
