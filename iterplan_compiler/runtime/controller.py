@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
 
 class RefusedEvent(Exception):
@@ -134,3 +135,44 @@ def run_bindings(controller: Controller, bindings, *, max_steps: int | None = No
         trace.append(label)
         steps += 1
     return {"steps": steps, "trace": trace, "stopped": stopped}
+
+
+def load_controller(path: str | Path) -> ControllerTable:
+    """Import a controller module from ``path`` and return its :class:`ControllerTable`.
+
+    Accepted (first match): module-level ``TABLE`` (what ``iterc compile`` emits), ``CONTROLLER``
+    (a table or a Controller), ``make_controller()`` (its ``.table``), or the only module-level
+    ControllerTable.  Raises ``ValueError`` with a user-facing message otherwise.
+    """
+    import importlib.util
+    import sys
+
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"controller module {path} not found")
+    name = f"_iterplan_controller_{abs(hash(str(p.resolve())))}"
+    spec = importlib.util.spec_from_file_location(name, p)
+    if spec is None or spec.loader is None:
+        raise ValueError(f"{path} is not a Python module")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    try:
+        spec.loader.exec_module(mod)
+    except Exception as exc:  # a broken module is the user's input, not our bug
+        raise ValueError(f"cannot import {path}: {type(exc).__name__}: {exc}") from None
+    for attr in ("TABLE", "CONTROLLER"):
+        obj = getattr(mod, attr, None)
+        if isinstance(obj, ControllerTable):
+            return obj
+        if isinstance(obj, Controller):
+            return obj.table
+    mk = getattr(mod, "make_controller", None)
+    if callable(mk):
+        c = mk()
+        if isinstance(c, Controller):
+            return c.table
+    tables = [v for v in vars(mod).values() if isinstance(v, ControllerTable)]
+    if len(tables) == 1:
+        return tables[0]
+    raise ValueError(f"{path} defines no controller: expected a module-level TABLE "
+                     f"(ControllerTable), CONTROLLER or make_controller()")

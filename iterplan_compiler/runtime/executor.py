@@ -37,14 +37,14 @@ charge: nothing is sent) or not flying.  Every event is logged with mission time
 
 from __future__ import annotations
 
-import csv
-import json
+__all__ = ["Executor", "LogEntry", "MissionContext", "MissionEnd", "MissionResult", "RunConfig",
+           "ideal_distance", "load_controller"]
+
 import math
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,10 +56,20 @@ from iterplan_compiler.runtime.bindings import (
     canon,
     map_rule_bindings,
 )
-from iterplan_compiler.runtime.controller import Controller, ControllerTable, RefusedEvent
+from iterplan_compiler.runtime.controller import (  # load_controller: re-exported
+    Controller,
+    ControllerTable,
+    RefusedEvent,
+    load_controller,
+)
 from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.iterator import Iterator
 from iterplan_compiler.runtime.planner import MotionPlanner
+from iterplan_compiler.runtime.results import (  # re-exported
+    LogEntry,
+    MissionResult,
+    ideal_distance,
+)
 from iterplan_compiler.runtime.sorter import Pose, make_sorter
 from iterplan_compiler.runtime.vehicle import (
     FAULTS,
@@ -107,124 +117,6 @@ class RunConfig:
     #: called for every controller event as ``on_event(kind, label)`` with kind "c"
     #: (controllable) or "u" (uncontrollable); returning True ends the mission successfully
     on_event: Callable[[str, str], bool | None] | None = None
-
-
-@dataclass
-class LogEntry:
-    t: float
-    kind: str          # "c" controllable, "u" uncontrollable, "v" vehicle, "p" planner, "x" note
-    label: str
-    state: int
-    x: float
-    y: float
-    alt: float
-    cell: int = -1
-
-
-@dataclass
-class MissionResult:
-    ok: bool
-    reason: str
-    summary: dict
-    log: list[LogEntry]
-    track: np.ndarray                 # (k, 4): t, x, y, alt
-    photos: list[tuple[float, int, float, float]]
-    arrivals: list[tuple[float, int, float, float]]
-    grid: GridMap
-    counts: dict = field(default_factory=dict)
-
-    # -- outputs ------------------------------------------------------------------------------
-    def write_track_csv(self, path: str | Path) -> None:
-        lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t", "lat", "lon", "alt", "east", "north"])
-            for (t, x, y, a), la, lo in zip(self.track, np.atleast_1d(lat), np.atleast_1d(lon), strict=False):
-                w.writerow([f"{t:.2f}", f"{la:.7f}", f"{lo:.7f}", f"{a:.1f}", f"{x:.2f}",
-                            f"{y:.2f}"])
-
-    def write_events_csv(self, path: str | Path) -> None:
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t", "kind", "label", "state", "east", "north", "alt", "cell"])
-            for e in self.log:
-                w.writerow([f"{e.t:.2f}", e.kind, e.label, e.state, f"{e.x:.2f}", f"{e.y:.2f}",
-                            f"{e.alt:.1f}", self.grid.cell_name(e.cell) if e.cell >= 0 else ""])
-
-    def geojson(self) -> dict:
-        """Track as a LineString, arrivals and photos as Points (lon, lat), summary as props."""
-        lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
-        line = [[round(float(a), 7), round(float(b), 7)] for a, b in
-                zip(np.atleast_1d(lon), np.atleast_1d(lat), strict=False)]
-        feats = [{"type": "Feature", "properties": {"kind": "track", **self.summary},
-                  "geometry": {"type": "LineString", "coordinates": line}}]
-        for kind, rows in (("arrival", self.arrivals), ("photo", self.photos)):
-            for t, cell, x, y in rows:
-                la, lo = self.grid.to_latlon(x, y)
-                feats.append({"type": "Feature",
-                              "properties": {"kind": kind, "t": round(t, 2),
-                                             "cell": self.grid.cell_name(cell)},
-                              "geometry": {"type": "Point",
-                                           "coordinates": [round(lo, 7), round(la, 7)]}})
-        return {"type": "FeatureCollection", "features": feats}
-
-    def write_geojson(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.geojson(), indent=1, sort_keys=True) + "\n")
-
-    def write_summary(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.summary, indent=2, sort_keys=True) + "\n")
-
-    def plot(self, path: str | Path) -> None:
-        """PNG of the map (locations and sensor cells shaded), the flown track, arrivals and
-        photos.  Cells are drawn as one image, so maps of 10^6 cells plot quickly."""
-        import matplotlib  # lazy: the aircraft never needs it
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        from matplotlib.colors import to_rgba
-        from matplotlib.patches import Patch
-
-        g = self.grid
-        fig, ax = plt.subplots(figsize=(8, min(16.0, 8 * g.rows / max(g.cols, 1) + 0.5)),
-                               dpi=100)
-        img = np.ones((g.rows, g.cols, 4), dtype=np.float32)
-        img[..., 3] = 0.0
-        loc = np.zeros(g.num_cells, dtype=bool)
-        loc[g.cells] = True
-        img.reshape(-1, 4)[loc] = to_rgba("#eeeeee")
-        colours = ["#f5a623", "#d0021b", "#4a90e2", "#7ed321", "#9013fe"]
-        handles = []
-        for i, (name, ids) in enumerate(sorted(g.sensors.items())):
-            col = to_rgba(colours[i % len(colours)], 0.45)
-            flat = img.reshape(-1, 4)
-            # Blend over what is there, so overlapping sensor sets stay visible.
-            flat[ids, :3] = flat[ids, :3] * (1 - col[3]) + np.asarray(col[:3]) * col[3]
-            flat[ids, 3] = np.maximum(flat[ids, 3], 0.6)
-            handles.append(Patch(color=col, label=name))
-        ax.imshow(img, origin="lower", interpolation="nearest",
-                  extent=(0, g.cols * g.cell_size, 0, g.rows * g.cell_size))
-        ax.plot(self.track[:, 1], self.track[:, 2], "-", color="#333333", lw=0.8, label="track")
-        if self.arrivals:
-            a = np.asarray([(x, y) for _, _, x, y in self.arrivals])
-            ax.plot(a[:, 0], a[:, 1], "o", ms=3, color="#4a90e2", label="arrived")
-        if self.photos:
-            p = np.asarray([(x, y) for _, _, x, y in self.photos])
-            ax.plot(p[:, 0], p[:, 1], "*", ms=9, color="#d0021b", label="photo")
-        ax.plot(*g.home, "k^", ms=8, label="home")
-        ax.set_xlim(-g.cell_size, (g.cols + 1) * g.cell_size)
-        ax.set_ylim(-g.cell_size, (g.rows + 1) * g.cell_size)
-        ax.set_aspect("equal")
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        s = self.summary
-        oh = s.get("overhead_pct")
-        ax.set_title(f"{g.name}: {s.get('duration_s', 0):.0f} s, {s.get('distance_m', 0):.0f} m, "
-                     f"overhead {'n/a' if oh is None else f'{oh:.0f} %'}")
-        ax.legend(handles=handles + ax.get_legend_handles_labels()[0], loc="upper right",
-                  fontsize=7)
-        fig.tight_layout()
-        fig.savefig(path)
-        plt.close(fig)
 
 
 class MissionContext:
@@ -497,6 +389,13 @@ class Executor:
             status = "no command: " + v.settle(0.0)
         elif not v.flying:
             status = "no command: the vehicle is not flying"
+            if getattr(v, "armed", False):
+                try:
+                    v.disarm()
+                    status = "disarmed on the ground" if not v.armed else \
+                        "on the ground, still armed: disarm refused"
+                except (VehicleError, KeyboardInterrupt) as exc:
+                    status = f"on the ground, still armed: {exc}"
         elif action is SafeAction.NONE:
             status = "no command (--on-end/--on-fault none): the last command stays in force"
         else:
@@ -650,70 +549,3 @@ class Executor:
             "speed_mps": round(speed, 2), "turn_radius_m": round(self.radius, 1),
             "vehicle": type(self.vehicle).__name__, "safe_state": self.safe_state,
         }
-
-
-def ideal_distance(points: Sequence[tuple[float, float]], start: tuple[float, float]) -> float:
-    """The paper's "ideal": minimum straight-line flight distance to visit ``points`` from
-    ``start`` at constant speed, ignoring turn limits.  The exact minimum is a TSP; we take the
-    better of two feasible tours — the order actually flown and a nearest-neighbour tour (for up
-    to 5,000 points) — so it is an upper bound on the true minimum and overheads are, if
-    anything, under-stated."""
-    if not points:
-        return 0.0
-    pts = np.asarray(points, dtype=np.float64)
-    path = np.vstack([np.asarray(start, dtype=np.float64)[None, :], pts])
-    flown = float(np.hypot(*np.diff(path, axis=0).T).sum())
-    if len(pts) > 5000:
-        return flown
-    todo = np.ones(len(pts), dtype=bool)
-    cur = np.asarray(start, dtype=np.float64)
-    total = 0.0
-    for _ in range(len(pts)):
-        d = np.hypot(pts[:, 0] - cur[0], pts[:, 1] - cur[1])
-        d[~todo] = np.inf
-        i = int(np.argmin(d))
-        total += float(d[i])
-        todo[i] = False
-        cur = pts[i]
-    return min(flown, total)
-
-
-def load_controller(path: str | Path) -> ControllerTable:
-    """Import a controller module from ``path`` and return its :class:`ControllerTable`.
-
-    Accepted (first match): module-level ``TABLE`` (what ``iterc compile`` emits), ``CONTROLLER``
-    (a table or a Controller), ``make_controller()`` (its ``.table``), or the only module-level
-    ControllerTable.  Raises ``ValueError`` with a user-facing message otherwise.
-    """
-    import importlib.util
-    import sys
-
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"controller module {path} not found")
-    name = f"_iterplan_controller_{abs(hash(str(p.resolve())))}"
-    spec = importlib.util.spec_from_file_location(name, p)
-    if spec is None or spec.loader is None:
-        raise ValueError(f"{path} is not a Python module")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    try:
-        spec.loader.exec_module(mod)
-    except Exception as exc:  # a broken module is the user's input, not our bug
-        raise ValueError(f"cannot import {path}: {type(exc).__name__}: {exc}") from None
-    for attr in ("TABLE", "CONTROLLER"):
-        obj = getattr(mod, attr, None)
-        if isinstance(obj, ControllerTable):
-            return obj
-        if isinstance(obj, Controller):
-            return obj.table
-    mk = getattr(mod, "make_controller", None)
-    if callable(mk):
-        c = mk()
-        if isinstance(c, Controller):
-            return c.table
-    tables = [v for v in vars(mod).values() if isinstance(v, ControllerTable)]
-    if len(tables) == 1:
-        return tables[0]
-    raise ValueError(f"{path} defines no controller: expected a module-level TABLE "
-                     f"(ControllerTable), CONTROLLER or make_controller()")

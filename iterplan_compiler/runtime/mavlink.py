@@ -51,36 +51,36 @@ tests; what flies is proven against ArduPilot SITL (``tests/sitl/``).
 from __future__ import annotations
 
 import math
-import os
 import statistics
-import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from iterplan_compiler.runtime.grid import LocalFrame, math_to_compass
+from iterplan_compiler.runtime.mavlink_link import (  # re-exported for users and tests
+    MODE_NAMES,
+    MODES,
+    LinkConfig,
+    MavlinkError,
+    MavlinkLink,
+    mav,
+    mavutil,
+    result_name,
+)
 from iterplan_compiler.runtime.vehicle import (
     HANDS_OFF,
     PLANNING_BANK_DEG,
     Start,
     Vehicle,
-    VehicleError,
     VehicleEvent,
     VehicleModel,
     VehiclePose,
     cruise_true_airspeed,
 )
 
-os.environ.setdefault("MAVLINK20", "1")
-from pymavlink import mavutil  # noqa: E402  (after MAVLINK20 so MAVLink 2 is used)
-
-mav = mavutil.mavlink
-
-#: ArduPlane flight modes (custom_mode numbers), from pymavlink's table.
-MODE_NAMES: dict[int, str] = dict(mavutil.mode_mapping_apm)
-MODES: dict[str, int] = {v: k for k, v in MODE_NAMES.items()}
+__all__ = ["MODES", "MODE_NAMES", "LinkConfig", "MavlinkError", "MavlinkVehicle", "mav",
+           "mavutil"]
 
 #: Parameters read at connection: name -> (fall-back name on older firmware, its scale).
 PARAMS: dict[str, tuple[str | None, float]] = {
@@ -102,53 +102,15 @@ FLIGHT_COMMANDS = frozenset({mav.MAV_CMD_DO_REPOSITION, mav.MAV_CMD_GUIDED_CHANG
                              mav.MAV_CMD_COMPONENT_ARM_DISARM, mav.MAV_CMD_DO_SET_MISSION_CURRENT})
 
 
-def result_name(result: int) -> str:
-    e = mav.enums["MAV_RESULT"].get(result)
-    return e.name.replace("MAV_RESULT_", "") if e else str(result)
-
-
-@dataclass(frozen=True)
-class LinkConfig:
-    """Time-outs (wall seconds unless said otherwise) and overrides of a MAVLink vehicle."""
-
-    heartbeat_timeout: float = 30.0   # to the first autopilot heartbeat
-    ready_timeout: float = 180.0      # for GPS fix, home and pre-arm checks
-    link_timeout: float = 3.0         # no autopilot heartbeat -> link_lost
-    telemetry_timeout: float = 3.0    # no GLOBAL_POSITION_INT -> telemetry_lost
-    gps_loss_s: float = 1.0           # vehicle seconds without a 3-D fix -> gps_lost
-    command_timeout: float = 3.0      # for an ACK or a mode confirmation
-    arm_attempts: int = 3
-    airspeed: float | None = None     # cruise airspeed to command (DO_CHANGE_SPEED) and plan with
-    loiter_radius: float | None = None  # radius of the end-of-mission loiter (default WP_LOITER_RAD)
-    system_id: int = 255
-    component_id: int = 190
-
-
-class MavlinkError(VehicleError):
-    """Connecting to / preparing the vehicle failed (message for the user)."""
-
-
-class MavlinkVehicle(Vehicle):
+class MavlinkVehicle(MavlinkLink, Vehicle):
     """ArduPlane through pymavlink; see the module docstring."""
 
     def __init__(self, conn: Any, frame: LocalFrame, config: LinkConfig | None = None,
                  progress: Callable[[str], None] | None = None):
-        self.conn = conn
+        MavlinkLink.__init__(self, conn, config, progress)
         self.frame = frame
-        self.cfg = config or LinkConfig()
-        self.progress = progress
-        self.ts, self.tc = 1, 1
-        self._lock = threading.Lock()
-        self._events: list[VehicleEvent] = []
         self._pose = VehiclePose(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        self._boot_t = 0.0
-        now = time.monotonic()
-        self._last_hb_wall = now
-        self._last_pos_wall = now
-        self._last_beat_t = -1e9
-        self._link_ok = True
-        self._dead = False                # the connection itself failed
-        self._hands_off = False
+        self._last_pos_wall = time.monotonic()
         self._monitoring = False          # faults are reported once the mission starts
         self._reported: set[str] = set()
         self.mode = "UNKNOWN"
@@ -160,10 +122,6 @@ class MavlinkVehicle(Vehicle):
         self.home_amsl: float | None = None
         self.alt_amsl = 0.0
         self.prearm_ok = False
-        self.params: dict[str, float] = {}
-        self._acks: dict[int, int] = {}
-        self._mission_acks: list[int] = []
-        self._mission_requests: list[int] = []
         self._takeoff_alt: float | None = None
         self._takeoff_done = False
         self._landing = False
@@ -171,15 +129,8 @@ class MavlinkVehicle(Vehicle):
         self._last_goto: tuple[float, float, float] | None = None   # course, alt, vehicle time
         self._last_course: tuple[float, float] | None = None
         self._speeds: deque[float] = deque(maxlen=600)
-        self.commands_sent = 0
-        self.command_log: list[tuple[float, str, str]] = []
-        self.statustexts: deque[str] = deque(maxlen=50)
         self.model = VehicleModel(18.0, PLANNING_BANK_DEG, 80.0)
         self._confirmed: Callable[[], bool] = lambda: True   # is the last safe command in force?
-        self._stop = threading.Event()
-        self._hb = threading.Thread(target=self._heartbeat_loop, daemon=True,
-                                    name="iterplan-mavlink-heartbeat")
-        self._hb.start()
 
     # -- connection ---------------------------------------------------------------------------
     @classmethod
@@ -203,21 +154,6 @@ class MavlinkVehicle(Vehicle):
             v.close()
             raise
         return v
-
-    def _wait_heartbeat(self, url: str) -> None:
-        self._say(f"waiting for a heartbeat on {url}")
-        deadline = time.monotonic() + self.cfg.heartbeat_timeout
-        while time.monotonic() < deadline:
-            self._send_heartbeat()
-            msg = self.conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
-            if msg is not None and msg.type not in (mav.MAV_TYPE_GCS,
-                                                    mav.MAV_TYPE_ONBOARD_CONTROLLER) \
-                    and msg.autopilot != mav.MAV_AUTOPILOT_INVALID:
-                self.ts, self.tc = msg.get_srcSystem(), msg.get_srcComponent()
-                self._handle(msg)
-                return
-        raise MavlinkError(f"no autopilot heartbeat on {url} within "
-                           f"{self.cfg.heartbeat_timeout:.0f} s")
 
     def _request_streams(self) -> None:
         for msg_id, hz in ((mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 10.0),
@@ -265,13 +201,6 @@ class MavlinkVehicle(Vehicle):
         roll = self.param("ROLL_LIMIT_DEG") or 45.0
         loiter = self.cfg.loiter_radius or self.param("WP_LOITER_RAD") or 80.0
         return VehicleModel(tas, min(roll, PLANNING_BANK_DEG), abs(loiter), source)
-
-    def close(self) -> None:
-        self._stop.set()
-        try:
-            self.conn.close()
-        except Exception:  # noqa: BLE001 - closing a dead link must not fail a mission report
-            pass
 
     # -- Vehicle API: state -------------------------------------------------------------------
     @property
@@ -353,12 +282,6 @@ class MavlinkVehicle(Vehicle):
             missing.append("the pre-arm checks")
         return missing
 
-    def _autopilot_says(self) -> str:
-        for text in reversed(self.statustexts):
-            if text.startswith(("PreArm", "Arm", "AHRS", "EKF", "GPS")):
-                return f" (autopilot: {text!r})"
-        return ""
-
     def arm(self) -> None:
         """Arm, checked (see the module docstring); raises :class:`MavlinkError`."""
         if self.armed:
@@ -376,6 +299,14 @@ class MavlinkVehicle(Vehicle):
                 self._wait_until(lambda: False, 2.0)
         raise MavlinkError(f"arming refused by the autopilot ({result_name(result)})"
                            f"{self._autopilot_says()}")
+
+    def disarm(self) -> None:
+        """Disarm, only when clearly on the ground (below 3 m, slower than 2 m/s); ArduPlane
+        itself also refuses an unforced disarm while it thinks it is flying."""
+        p = self._pose
+        if self.armed and not self._hands_off and p.alt < 3.0 and p.groundspeed < 2.0:
+            self._command_sync(mav.MAV_CMD_COMPONENT_ARM_DISARM, 0)
+            self._wait_until(lambda: not self.armed)
 
     def takeoff(self, alt: float) -> None:
         self._set_param("TKOFF_ALT", float(alt))
@@ -498,13 +429,6 @@ class MavlinkVehicle(Vehicle):
         return f"vehicle in {self.mode}" + ("" if ok else f" (wanted {want}, not confirmed)")
 
     # -- internals: commands ------------------------------------------------------------------
-    def _say(self, text: str) -> None:
-        if self.progress:
-            self.progress(f"mavlink: {text}")
-
-    def _emit(self, kind: str, detail: str = "") -> None:
-        self._events.append(VehicleEvent(self._boot_t, kind, detail))
-
     def _fault(self, kind: str, detail: str) -> None:
         if not self._monitoring or kind in self._reported:
             return
@@ -513,6 +437,17 @@ class MavlinkVehicle(Vehicle):
             self._hands_off = True
         self._emit(kind, detail)
         self._say(f"{kind}: {detail}")
+
+    def _on_link_failure(self, detail: str) -> None:
+        self._monitoring = self._monitoring or self.armed
+        self._fault("link_lost", detail)
+
+    def _on_refused(self, command: int, result: int) -> None:
+        if command in FLIGHT_COMMANDS and self._monitoring:
+            e = mav.enums["MAV_CMD"].get(command)
+            name = e.name if e else str(command)
+            self._fault("rejected", f"{name} refused ({result_name(result)})"
+                                    f"{self._autopilot_says()}")
 
     def _may_fly(self) -> bool:
         """Fly-to/steer commands go out only in the GUIDED mode we set ourselves."""
@@ -527,71 +462,6 @@ class MavlinkVehicle(Vehicle):
         self._monitoring = True
         if self.cfg.airspeed:
             self._command_long(mav.MAV_CMD_DO_CHANGE_SPEED, 0, float(self.cfg.airspeed), -1)
-
-    def _send(self, fn: Callable[[Any], None], *, detail: str = "", log: bool = True) -> None:
-        if (self._hands_off and log) or self._dead:
-            return   # somebody else is in charge: no commands at all
-        try:
-            with self._lock:
-                fn(self.conn.mav)
-        except OSError as exc:
-            self._link_dead(exc)
-            return
-        if log:
-            self.commands_sent += 1
-            self.command_log.append((self._boot_t, detail.split(" ")[0], detail))
-
-    def _send_heartbeat(self) -> None:
-        if self._dead:
-            return
-        try:
-            with self._lock:
-                self.conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0,
-                                             mav.MAV_STATE_ACTIVE)
-        except OSError as exc:
-            self._link_dead(exc)
-
-    def _heartbeat_loop(self) -> None:
-        while not self._stop.wait(1.0) and not self._dead:
-            try:
-                self._send_heartbeat()
-            except Exception:  # noqa: BLE001 - socket closed underneath us: just stop
-                return
-
-    def _link_dead(self, exc: BaseException) -> None:
-        """The connection itself failed (TCP reset, serial unplugged): link loss, at once."""
-        if self._dead:
-            return
-        self._dead = True
-        self._link_ok = False
-        self._monitoring = self._monitoring or self.armed
-        self._fault("link_lost", f"connection failed ({exc.strerror or exc}); the autopilot's "
-                                 f"failsafe is in charge" if isinstance(exc, OSError)
-                    else f"connection failed ({exc})")
-
-    def _command_long(self, cmd: int, *params: float, log: bool = True) -> None:
-        p = list(params) + [0.0] * (7 - len(params))
-        name = mav.enums["MAV_CMD"][cmd].name.replace("MAV_CMD_", "").lower() \
-            if cmd in mav.enums["MAV_CMD"] else str(cmd)
-        self._send(lambda m: m.command_long_send(self.ts, self.tc, cmd, 0, *p),
-                   detail=f"{name} {' '.join(f'{v:g}' for v in params)}", log=log)
-
-    def _command_sync(self, cmd: int, *params: float) -> int:
-        """Send a COMMAND_LONG and wait for its ACK; returns the MAV_RESULT (-1: no answer)."""
-        self._acks.pop(cmd, None)
-        self._command_long(cmd, *params)
-        self._wait_until(lambda: cmd in self._acks)
-        return self._acks.get(cmd, -1)
-
-    def _wait_until(self, cond: Callable[[], bool], timeout: float | None = None) -> bool:
-        deadline = time.monotonic() + (self.cfg.command_timeout if timeout is None else timeout)
-        while not cond():
-            if time.monotonic() > deadline:
-                return False
-            if self._dead:
-                raise MavlinkError("lost the connection to the autopilot")
-            self._pump(0.05)
-        return True
 
     def _request_mode(self, name: str, wait: bool = True) -> None:
         """Ask for mode ``name``; with ``wait``, raise :class:`MavlinkError` unless HEARTBEAT
@@ -616,60 +486,7 @@ class MavlinkVehicle(Vehicle):
         raise MavlinkError(f"mode change to {name} {why}; the vehicle is in {self.mode}"
                            f"{self._autopilot_says()}")
 
-    def _set_param(self, name: str, value: float) -> None:
-        self.params.pop(name, None)
-        self._send(lambda m: m.param_set_send(self.ts, self.tc, name.encode(), value,
-                                              mav.MAV_PARAM_TYPE_REAL32),
-                   detail=f"param_set {name} {value:g}")
-        if not self._wait_until(lambda: name in self.params) \
-                or abs(self.params[name] - value) > 1e-3 * max(1.0, abs(value)):
-            raise MavlinkError(f"setting {name} = {value:g} was not confirmed by the autopilot")
-
-    def _upload_mission(self, items: list[tuple[int, tuple[float, float], float]]) -> None:
-        """MISSION_COUNT / MISSION_REQUEST(_INT) / MISSION_ITEM_INT / MISSION_ACK handshake."""
-        self._mission_acks.clear()
-        self._mission_requests.clear()
-        self._send(lambda m: m.mission_count_send(self.ts, self.tc, len(items)),
-                   detail=f"mission_count {len(items)}")
-        sent: set[int] = set()
-        deadline = time.monotonic() + 10.0
-        while not self._mission_acks:
-            if time.monotonic() > deadline:
-                raise MavlinkError("landing: mission upload timed out")
-            self._pump(0.05)
-            while self._mission_requests:
-                seq = self._mission_requests.pop(0)
-                if not 0 <= seq < len(items):
-                    continue
-                cmd, (lat, lon), alt = items[seq]
-                frame = mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT if seq else mav.MAV_FRAME_GLOBAL_INT
-                self._send(lambda m, s=seq, c=cmd, la=lat, lo=lon, z=alt, f=frame:
-                           m.mission_item_int_send(self.ts, self.tc, s, f, c, 0, 1, 0, 0, 0, 0,
-                                                   int(la * 1e7), int(lo * 1e7), z),
-                           detail=f"mission_item {seq}")
-                sent.add(seq)
-        if self._mission_acks[-1] != mav.MAV_MISSION_ACCEPTED:
-            raise MavlinkError(f"landing: mission refused ({self._mission_acks[-1]})")
-
     # -- internals: receiving -----------------------------------------------------------------
-    def _pump(self, timeout: float) -> None:
-        first = True
-        while not self._dead:
-            try:
-                msg = self.conn.recv_match(blocking=first and timeout > 0,
-                                           timeout=timeout or None)
-            except OSError as exc:
-                self._link_dead(exc)
-                time.sleep(min(timeout, 0.05))
-                return
-            first = False
-            if msg is None:
-                break
-            self._handle(msg)
-        if self._boot_t - self._last_beat_t >= 1.0:   # 1 Hz of vehicle time, too
-            self._last_beat_t = self._boot_t
-            self._send_heartbeat()
-
     def _check(self) -> None:
         now = time.monotonic()
         age = now - self._last_hb_wall
@@ -691,14 +508,6 @@ class MavlinkVehicle(Vehicle):
             if self.mode != req[0]:
                 self._fault("rejected", f"mode change to {req[0]} not confirmed; the vehicle "
                                         f"is in {self.mode}")
-
-    def _handle(self, msg: Any) -> None:
-        t = msg.get_type()
-        if t == "BAD_DATA" or msg.get_srcSystem() != self.ts:
-            return
-        handler = _HANDLERS.get(t)
-        if handler is not None:
-            handler(self, msg)
 
     def _on_heartbeat(self, msg: Any) -> None:
         if msg.get_srcComponent() != self.tc or msg.type in (mav.MAV_TYPE_GCS,
@@ -775,49 +584,23 @@ class MavlinkVehicle(Vehicle):
     def _on_home(self, msg: Any) -> None:
         self.home_amsl = msg.altitude / 1000.0
 
-    def _on_param(self, msg: Any) -> None:
-        pid = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
-        self.params[pid.rstrip("\x00")] = float(msg.param_value)
-
-    def _on_command_ack(self, msg: Any) -> None:
-        self._acks[msg.command] = msg.result
-        if msg.result in (mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_IN_PROGRESS):
-            return
-        if msg.command in FLIGHT_COMMANDS and self._monitoring:
-            name = mav.enums["MAV_CMD"][msg.command].name if msg.command in mav.enums["MAV_CMD"] \
-                else str(msg.command)
-            self._fault("rejected", f"{name} refused ({result_name(msg.result)})"
-                                    f"{self._autopilot_says()}")
-
     def _on_mission_ack(self, msg: Any) -> None:
         self._mission_acks.append(msg.type)
         if msg.type != mav.MAV_MISSION_ACCEPTED and self.expected_mode == "GUIDED" \
                 and not self._landing:
             self._fault("rejected", f"fly-to refused (MISSION_ACK {msg.type})")
 
-    def _on_mission_request(self, msg: Any) -> None:
-        self._mission_requests.append(msg.seq)
-
-    def _on_statustext(self, msg: Any) -> None:
-        text = msg.text if isinstance(msg.text, str) else msg.text.decode(errors="replace")
-        self.statustexts.append(text)
-        self._emit("message", text)
-
     def _on_reached(self, msg: Any) -> None:
         self._emit("reached", f"seq {msg.seq}")
 
 
-_HANDLERS: dict[str, Callable[[MavlinkVehicle, Any], None]] = {
+MavlinkVehicle.HANDLERS = {
+    **MavlinkLink.HANDLERS,
     "HEARTBEAT": MavlinkVehicle._on_heartbeat,
     "GLOBAL_POSITION_INT": MavlinkVehicle._on_position,
     "GPS_RAW_INT": MavlinkVehicle._on_gps,
     "SYS_STATUS": MavlinkVehicle._on_sys_status,
     "HOME_POSITION": MavlinkVehicle._on_home,
-    "PARAM_VALUE": MavlinkVehicle._on_param,
-    "COMMAND_ACK": MavlinkVehicle._on_command_ack,
     "MISSION_ACK": MavlinkVehicle._on_mission_ack,
-    "MISSION_REQUEST": MavlinkVehicle._on_mission_request,
-    "MISSION_REQUEST_INT": MavlinkVehicle._on_mission_request,
-    "STATUSTEXT": MavlinkVehicle._on_statustext,
     "MISSION_ITEM_REACHED": MavlinkVehicle._on_reached,
 }

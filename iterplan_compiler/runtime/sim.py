@@ -151,6 +151,10 @@ class SimVehicle(Vehicle):
         self.armed = True
         self._emit("armed")
 
+    def disarm(self) -> None:
+        if self.mode in ("IDLE", "LANDED"):
+            self.armed = False
+
     def takeoff(self, alt: float) -> None:
         if not self.armed:
             self._emit("rejected", "takeoff: not armed")

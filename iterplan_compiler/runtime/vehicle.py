@@ -214,6 +214,9 @@ class Vehicle(ABC):
             return Start.AIRBORNE if self.flying else Start.GROUND
         return start
 
+    def disarm(self) -> None:  # noqa: B027 - optional hook
+        """Disarm (only ever sent on the ground)."""
+
     def take_control(self) -> None:  # noqa: B027 - optional hook
         """An airborne start: put the vehicle in the mode the runtime commands in."""
 

@@ -238,3 +238,95 @@ def test_iterc_run_over_mavlink(tmp_path, capsys):
     assert "safe state: loiter commanded" in cap.out
     rows = (tmp_path / "out" / "commands.csv").read_text().splitlines()
     assert rows[0] == "t,command,detail" and any(",goto," in r for r in rows)
+
+
+def _cli_files(tmp_path):
+    (tmp_path / "map.json").write_text(json.dumps(MAP))
+    shutil.copy(Path(__file__).parent / "fire_patrol.py", tmp_path / "ctl.py")
+    return [str(tmp_path / "ctl.py"), "--map", str(tmp_path / "map.json")]
+
+
+def test_iterc_run_refused_arm_exits_1_with_the_reason(tmp_path, capsys):
+    grid = load_map(data=MAP)
+    peer, sim, url = start_peer(grid)
+    peer.prearm_delay = 0.0
+    # Ready by the pre-arm bit, but every arm is refused (e.g. a failing arming check).
+    peer._ready = lambda: True
+    original = peer._on_command_long
+
+    def refuse(msg):
+        if msg.command == mav.MAV_CMD_COMPONENT_ARM_DISARM and msg.param1 == 1:
+            peer._text("Arm: Throttle too high")
+            peer._ack(msg.command, mav.MAV_RESULT_DENIED)
+        else:
+            original(msg)
+    peer._on_command_long = refuse
+    try:
+        rc = main(["run", *_cli_files(tmp_path), "--vehicle", "mavlink", "--connect", url,
+                   "--out", str(tmp_path / "out"), "--no-plot", "--max-time", "60"])
+    finally:
+        peer.stop()
+    cap = capsys.readouterr()
+    assert rc == 1
+    assert "arming refused by the autopilot (DENIED) (autopilot: 'Arm: Throttle too high')" \
+        in cap.out
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert not s["ok"] and s["safe_state"] == "no command: the vehicle is not flying"
+
+
+def test_iterc_run_sigterm_commands_the_safe_state_and_writes_outputs(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    grid = load_map(data=MAP)
+    peer, sim, url = start_peer(grid)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "iterplan_compiler", "run",
+                             *_cli_files(tmp_path), "--vehicle", "mavlink", "--connect", url,
+                             "--out", str(out), "--no-plot", "--on-end", "rtl"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while sim.mode not in ("GUIDED", "COURSE") or sim.alt < 30:
+            assert time.monotonic() < deadline and proc.poll() is None
+            time.sleep(0.1)
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGTERM)
+        so, se = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        peer.stop()
+    assert proc.returncode == 1, se
+    assert "mission ended early: interrupted" in so and "rtl commanded" in so
+    assert sim.mode == "RTL" and peer.mode == "RTL"
+    s = json.loads((out / "summary.json").read_text())
+    assert s["reason"] == "interrupted" and s["safe_state"] == "rtl commanded; vehicle in RTL"
+    for f in ("events.csv", "track.csv", "track.geojson", "commands.csv"):
+        assert (out / f).stat().st_size > 0
+
+
+def test_frozen_vehicle_clock_cannot_hang_a_run():
+    """Wall-clock bound: a vehicle whose clock never moves still ends within max_wall."""
+    grid = load_map(data=MAP)
+
+    class Frozen(SimVehicle):
+        def advance(self, dt):
+            time.sleep(0.01)
+
+    t0 = time.monotonic()
+    r = Executor(TABLE, grid, Frozen(SimParams(), home=grid.home),
+                 config=RunConfig(max_wall=1.0, ideal_compute=True)).run()
+    assert not r.ok and "wall-clock limit of 1 s" in r.reason
+    assert time.monotonic() - t0 < 5
+
+
+def test_refused_mode_change_ends_the_mission(link):
+    grid, sim, peer, v = link
+    original = peer._set_mode
+    peer._set_mode = lambda custom: False if int(custom) == 13 else original(custom)  # TAKEOFF
+    r = Executor(TABLE, grid, v, config=RunConfig(planner_mode="carrot", tick=0.5)).run()
+    assert not r.ok and r.reason.startswith("mode change to TAKEOFF refused (FAILED)")
+    assert "vehicle is in MANUAL" in r.reason
+    assert r.summary["safe_state"] == "disarmed on the ground" and not sim.armed

@@ -14,7 +14,6 @@ iterc).  They are injected ``fault_after`` simulated seconds after the vehicle e
 from __future__ import annotations
 
 import json
-import math
 import os
 import signal
 import subprocess
