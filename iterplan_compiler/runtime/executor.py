@@ -117,6 +117,12 @@ class RunConfig:
     #: called for every controller event as ``on_event(kind, label)`` with kind "c"
     #: (controllable) or "u" (uncontrollable); returning True ends the mission successfully
     on_event: Callable[[str, str], bool | None] | None = None
+    #: called after every physical tick as ``observe(executor, final=False)`` and once at the
+    #: end with ``final=True`` (a live view takes snapshots here; keep it cheap)
+    observe: Callable[[Executor, bool], None] | None = None
+    #: pace a simulated vehicle at this many simulated seconds per wall second (None: as fast
+    #: as possible)
+    realtime: float | None = None
 
 
 class MissionContext:
@@ -214,6 +220,7 @@ class Executor:
         self._last_track = -1e9
         self._wall_deadline: float | None = None
         self._started = False
+        self._pace_mark = time.monotonic()
         self.safe_state = ""
 
     def _setup_planning(self) -> None:
@@ -311,13 +318,27 @@ class Executor:
                     raise MissionEnd(False, f"take-off failed: {e.kind}: {e.detail}")
         raise MissionEnd(False, "take-off did not complete within 600 s")
 
+    def _pace(self, dt: float) -> None:
+        """Sleep so that simulated time runs ``realtime`` times faster than wall time."""
+        assert self.cfg.realtime
+        now = time.monotonic()
+        due = self._pace_mark + dt / self.cfg.realtime
+        if due > now:
+            time.sleep(due - now)
+            self._mark += due - now          # sleeping is not think time
+        self._pace_mark = max(due, now - 1.0)  # never "catch up" more than a second
+
     def _check_wall(self) -> None:
         if self._wall_deadline is not None and time.monotonic() > self._wall_deadline:
             raise MissionEnd(False, f"wall-clock limit of {self.cfg.max_wall:.0f} s reached")
 
     def _physical_tick(self, dt: float) -> None:
         self.vehicle.advance(dt)
+        if self.cfg.realtime and self.vehicle.is_simulated:
+            self._pace(dt)
         self._record_track()
+        if self.cfg.observe is not None:
+            self.cfg.observe(self, False)
         for pe in self.planner.update():
             self.log_entry("p", f"{pe.kind} {pe.detail}",
                            -1 if self.ctx.target_cell is None else self.ctx.target_cell)
@@ -377,7 +398,11 @@ class Executor:
                                          else self.cfg.fault_action)
         self._record_track(force=True)
         self._progress(force=True)
-        return MissionResult(ok, reason, self._summary(ok, reason), self.log,
+        self.summary = self._summary(ok, reason)
+        self.ok, self.reason = ok, reason
+        if self.cfg.observe is not None:
+            self.cfg.observe(self, True)
+        return MissionResult(ok, reason, self.summary, self.log,
                              np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
                              self.photos, self.arrivals, self.grid, dict(self.counts))
 

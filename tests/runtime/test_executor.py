@@ -241,3 +241,23 @@ def test_fire_patrol_in_strong_gusty_wind(mode):
     for _, c, x, y in r.arrivals:
         assert grid.cell_at(x, y) == c
     assert r.summary["misses"] <= 2
+
+
+def test_realtime_paces_the_simulator_and_observe_sees_every_tick():
+    import time
+
+    seen = {"ticks": 0, "final": 0, "t": []}
+
+    def observe(ex, final):
+        seen["final" if final else "ticks"] += 1
+        seen["t"].append(ex.vehicle.time)
+
+    t0 = time.monotonic()
+    grid, r = fly(realtime=400.0, observe=observe)
+    wall = time.monotonic() - t0
+    sim_s = r.summary["duration_s"]
+    assert r.ok and seen["final"] == 1 and seen["ticks"] > 100
+    assert seen["t"] == sorted(seen["t"])
+    # Paced: at least the simulated time / 400 of wall time.
+    assert wall >= 0.9 * sim_s / 400.0, (wall, sim_s)
+    assert r.summary == fly()[1].summary     # pacing changes nothing observable
