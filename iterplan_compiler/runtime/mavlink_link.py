@@ -42,8 +42,8 @@ class LinkConfig:
 
     heartbeat_timeout: float = 30.0   # to the first autopilot heartbeat
     ready_timeout: float = 180.0      # for GPS fix, home and pre-arm checks
-    link_timeout: float = 3.0         # no autopilot heartbeat -> link_lost
-    telemetry_timeout: float = 3.0    # no GLOBAL_POSITION_INT -> telemetry_lost
+    link_timeout: float = 5.0         # no autopilot heartbeat -> link_lost (ArduPilot's own
+    telemetry_timeout: float = 5.0    # FS_LONG_TIMEOUT); no GLOBAL_POSITION_INT -> telemetry_lost
     gps_loss_s: float = 1.0           # vehicle seconds without a 3-D fix -> gps_lost
     command_timeout: float = 3.0      # for an ACK or a mode confirmation
     arm_attempts: int = 3
