@@ -15,11 +15,10 @@ Exit code 0 when the mission completed, 1 when it ended early (safely) or the in
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import signal
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -108,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
     from iterplan_compiler.runtime.grid import MapError, load_map
     from iterplan_compiler.runtime.parm import ParmError, read_parm
+    from iterplan_compiler.runtime.runfiles import check_out, parse_until, until_hook, write_outputs
     from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
 
     def err(msg: str) -> int:
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
 
     until = None
     if args.until is not None:
-        until = _parse_until(args.until)
+        until = parse_until(args.until)
         if until is None:
             return usage(f"--until expects LABEL or LABEL:K (K >= 1), not {args.until!r}")
     passes = args.passes if args.passes is not None else (0 if until else 1)
@@ -155,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
     except ParmError as exc:
         return err(str(exc))
     out = Path(args.out)
-    problem = _check_out(out, [Path(args.controller), Path(args.map), *map(Path, args.param)])
+    problem = check_out(out, [Path(args.controller), Path(args.map), *map(Path, args.param)])
     if problem:
         return err(problem)
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
                             end_action=SafeAction(args.on_end),
                             fault_action=SafeAction(args.on_fault),
                             progress=progress, progress_every=60.0,
-                            on_event=_until_hook(*until) if until else None)
+                            on_event=until_hook(*until) if until else None)
             result = Executor(table, grid, vehicle, config=cfg).run()
         except KeyboardInterrupt:
             return err("interrupted before the mission started; nothing was commanded")
@@ -191,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         finally:
             if vehicle is not None:
                 vehicle.close()
-        _write_outputs(result, out, vehicle, plot=not args.no_plot)
+        write_outputs(result, out, vehicle, plot=not args.no_plot)
     s = result.summary
     print(f"{'mission completed' if result.ok else 'mission ended early: ' + result.reason}")
     print(f"  duration {s['duration_s']:.1f} s at {s['speed_mps']:.1f} m/s, distance "
@@ -217,50 +217,6 @@ def _sim_vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
     return SimVehicle(sp, home=grid.home, heading=grid.arrival_heading)
 
 
-def _check_out(out: Path, inputs: list[Path]) -> str | None:
-    """Problems with ``--out`` found before the mission (so a flight's log is never lost)."""
-    if out.exists() and not out.is_dir():
-        return f"--out {out} exists and is not a folder"
-    resolved = {p.resolve() for p in inputs if p.exists()}
-    if out.resolve() in resolved:
-        return f"--out {out} is an input file"
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".iterplan-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as exc:
-        return f"--out {out} is not writable: {exc.strerror or exc}"
-    for name in OUTPUTS:
-        if (out / name).resolve() in resolved:
-            return f"--out {out} would overwrite the input {out / name}"
-    return None
-
-
-OUTPUTS = ("track.csv", "track.geojson", "events.csv", "summary.json", "track.png",
-           "commands.csv")
-
-
-def _write_outputs(result: Any, out: Path, vehicle: Any, plot: bool) -> None:
-    # A second Ctrl-C must not cut the outputs short.
-    with _interrupts_deferred():
-        for stale in OUTPUTS:               # never leave a previous run's files beside these
-            (out / stale).unlink(missing_ok=True)
-        result.write_track_csv(out / "track.csv")
-        result.write_geojson(out / "track.geojson")
-        result.write_events_csv(out / "events.csv")
-        log = getattr(vehicle, "command_log", None)
-        if log is not None:
-            with open(out / "commands.csv", "w", newline="") as fh:
-                w = csv.writer(fh)
-                w.writerow(["t", "command", "detail"])
-                for t, name, detail in log:
-                    w.writerow([f"{t:.2f}", name, detail])
-        if plot:
-            result.plot(out / "track.png")
-        result.write_summary(out / "summary.json")    # last: its presence marks a whole set
-
-
 @contextmanager
 def _sigterm_as_interrupt() -> Iterator[None]:
     """SIGTERM ends a mission like Ctrl-C (safe state, outputs) instead of killing it."""
@@ -277,47 +233,3 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, old)
 
 
-@contextmanager
-def _interrupts_deferred() -> Iterator[None]:
-    """Ignore SIGINT/SIGTERM while the outputs are written (the mission has ended anyway)."""
-    try:
-        old = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
-    except ValueError:
-        yield
-        return
-    try:
-        yield
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-
-
-def _parse_until(text: str) -> tuple[str, int] | None:
-    """``LABEL`` or ``LABEL:K`` -> (canonical label, K), or None if malformed."""
-    from iterplan_compiler.runtime.bindings import canon
-
-    label, _, count = text.partition(":")
-    label = canon(label)
-    if not label:
-        return None
-    if not count:
-        return label, 1
-    try:
-        k = int(count)
-    except ValueError:
-        return None
-    return (label, k) if k >= 1 else None
-
-
-def _until_hook(label: str, k: int) -> Callable[[str, str], bool]:
-    """Executor ``on_event`` hook: True (end the mission) at the k-th event ``label``."""
-    from iterplan_compiler.runtime.bindings import canon
-
-    seen = [0]
-
-    def hook(kind: str, event: str) -> bool:
-        if canon(event) != label:
-            return False
-        seen[0] += 1
-        return seen[0] >= k
-    return hook

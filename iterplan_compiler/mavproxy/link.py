@@ -94,7 +94,7 @@ class ModuleLink:
 
     ``get_master`` returns MAVProxy's current master link (``MPModule.master``) or None;
     when ``stop_event`` (MAVProxy's shutdown flag) is set, the next :meth:`recv_match` raises
-    ``KeyboardInterrupt`` as after :meth:`interrupt`.
+    ``KeyboardInterrupt`` as after :meth:`interrupt` (at most one interrupt per link).
     """
 
     def __init__(self, get_master: Callable[[], Any], maxlen: int = 50_000,
@@ -127,11 +127,17 @@ class ModuleLink:
             self.received += 1
             self._cv.notify()
 
-    def interrupt(self) -> None:
-        """Make the next :meth:`recv_match` raise ``KeyboardInterrupt`` (once)."""
+    def interrupt(self) -> bool:
+        """Make the next :meth:`recv_match` raise ``KeyboardInterrupt``.  Only the first request
+        (this or MAVProxy's shutdown flag) ever does: a second one would cut the safe end
+        short.  Returns whether this call was that first request."""
         with self._cv:
+            if self._stop_seen:
+                return False
+            self._stop_seen = True
             self._interrupt = True
             self._cv.notify_all()
+            return True
 
     # -- pymavlink connection API used by MavlinkVehicle -----------------------------------------
     def recv_match(self, condition: Any = None, type: Any = None,  # noqa: A002 - pymavlink's name

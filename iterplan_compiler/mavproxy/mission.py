@@ -89,12 +89,12 @@ def run_parser() -> argparse.ArgumentParser:
 
 def parse_run(argv: list[str]) -> argparse.Namespace:
     """Parse ``iterplan run`` arguments; raises :class:`UsageError`."""
-    from iterplan_compiler.commands.run import _parse_until
+    from iterplan_compiler.runtime.runfiles import parse_until
 
     args = run_parser().parse_args(argv)
     args.until_spec = None
     if args.until is not None:
-        args.until_spec = _parse_until(args.until)
+        args.until_spec = parse_until(args.until)
         if args.until_spec is None:
             raise UsageError(f"--until expects LABEL or LABEL:K (K >= 1), not {args.until!r}")
     if args.passes is not None and args.passes < 0:
@@ -130,7 +130,6 @@ class Mission:
         self.last_line = ""
         self.started = time.monotonic()
         self.ended: float | None = None
-        self._stop_requested = False
         self.thread = threading.Thread(target=self._main, name="iterplan-mission")
         # Not a daemon: when MAVProxy exits, the interpreter waits for the safe end and the
         # outputs (every wait in the runtime is bounded).
@@ -145,12 +144,8 @@ class Mission:
 
     def stop(self) -> bool:
         """End the mission safely (``--on-end``), like Ctrl-C in ``iterc run``; False when a
-        stop was already requested."""
-        if self._stop_requested:
-            return False
-        self._stop_requested = True
-        self.link.interrupt()
-        return True
+        stop was already requested (or MAVProxy is shutting down)."""
+        return self.link.interrupt()
 
     def feed(self, msg: Any) -> None:
         self.link.feed(msg)
@@ -221,11 +216,11 @@ class Mission:
         self.say(f"error: {msg}")
 
     def _fly(self) -> None:
-        from iterplan_compiler.commands.run import _check_out, _until_hook, _write_outputs
         from iterplan_compiler.runtime.bindings import BindingError, canon
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
         from iterplan_compiler.runtime.grid import MapError, load_map
         from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
+        from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs
         from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
 
         a = self.args
@@ -243,7 +238,7 @@ class Mission:
             labels = {canon(x) for x in table.controllable | table.uncontrollable}
             if until[0] not in labels:
                 return self._fail(f"--until {until[0]}: the controller has no event of that name")
-        problem = _check_out(self.out, [Path(a.controller), Path(a.map)])
+        problem = check_out(self.out, [Path(a.controller), Path(a.map)])
         if problem:
             return self._fail(problem)
         passes = a.passes if a.passes is not None else (0 if until else 1)
@@ -256,7 +251,7 @@ class Mission:
         result = None
         try:
             try:
-                attach(vehicle)
+                vehicle.start_link("MAVProxy's master link")
                 if self.on_fly is not None:
                     self.on_fly()
                 cfg = RunConfig(sorter=a.sorter, seed=a.seed, passes=passes,
@@ -267,7 +262,7 @@ class Mission:
                                 end_action=SafeAction(a.on_end),
                                 fault_action=SafeAction(a.on_fault),
                                 progress=self._progress, progress_every=60.0,
-                                on_event=_until_hook(*until) if until else None)
+                                on_event=until_hook(*until) if until else None)
                 self.executor = Executor(table, grid, vehicle, config=cfg)
                 self.phase = "flying"
                 result = self.executor.run()
@@ -278,18 +273,8 @@ class Mission:
         finally:
             vehicle.close()
         self.phase = "writing outputs"
-        _write_outputs(result, self.out, vehicle, plot=a.plot)
+        write_outputs(result, self.out, vehicle, plot=a.plot)
         self.result = result
         self.phase = "done"
         for line in self._result_lines():
             self.say(line)
-
-
-def attach(vehicle: Any) -> None:
-    """What ``MavlinkVehicle.connect`` does after opening its socket: wait for the autopilot's
-    heartbeat, request the telemetry streams, read the parameters, derive the flight model
-    (the vehicle's internal steps, in ``connect``'s order)."""
-    vehicle._wait_heartbeat("MAVProxy's master link")
-    vehicle._request_streams()
-    vehicle._read_params()
-    vehicle.model = vehicle._derive_model()

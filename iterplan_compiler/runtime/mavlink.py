@@ -136,24 +136,37 @@ class MavlinkVehicle(MavlinkLink, Vehicle):
     @classmethod
     def connect(cls, url: str, frame: LocalFrame, config: LinkConfig | None = None,
                 progress: Callable[[str], None] | None = None) -> MavlinkVehicle:
-        """Open ``url``, wait for the autopilot, request telemetry, read parameters; raises
-        :class:`MavlinkError`."""
+        """Open ``url`` and :meth:`attach` to it; raises :class:`MavlinkError`."""
         cfg = config or LinkConfig()
         try:
             conn = mavutil.mavlink_connection(url, source_system=cfg.system_id,
                                               source_component=cfg.component_id)
         except Exception as exc:  # noqa: BLE001 - pymavlink raises assorted OSErrors/ValueErrors
             raise MavlinkError(f"cannot open {url}: {exc}") from None
-        v = cls(conn, frame, cfg, progress)
+        return cls.attach(conn, frame, cfg, progress, name=url)
+
+    @classmethod
+    def attach(cls, conn: Any, frame: LocalFrame, config: LinkConfig | None = None,
+               progress: Callable[[str], None] | None = None,
+               name: str = "the link") -> MavlinkVehicle:
+        """A vehicle over an open connection ``conn`` (anything with pymavlink's
+        ``recv_match``, ``mav`` and ``close``, e.g. MAVProxy's link): wait for the autopilot,
+        request telemetry, read the parameters; raises :class:`MavlinkError`."""
+        v = cls(conn, frame, config, progress)
         try:
-            v._wait_heartbeat(url)
-            v._request_streams()
-            v._read_params()
-            v.model = v._derive_model()
+            v.start_link(name)
         except BaseException:
             v.close()
             raise
         return v
+
+    def start_link(self, name: str = "the link") -> None:
+        """The steps of :meth:`attach` on an existing instance (a caller that needs the object
+        while it waits, e.g. to stop it)."""
+        self._wait_heartbeat(name)
+        self._request_streams()
+        self._read_params()
+        self.model = self._derive_model()
 
     def _request_streams(self) -> None:
         for msg_id, hz in ((mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 10.0),

@@ -172,16 +172,20 @@ def test_module_link_recv_match_semantics():
     assert link.recv_match(type="HEARTBEAT", blocking=True, timeout=0.1).t == "HEARTBEAT"
     assert link.recv_match().t == "GPS_RAW_INT"
     link.feed(Msg("HEARTBEAT"))
-    link.interrupt()
+    assert link.interrupt()
     with pytest.raises(KeyboardInterrupt):
         link.recv_match(blocking=True, timeout=1)
     assert link.recv_match().t == "HEARTBEAT"            # once only, nothing lost
+    assert not link.interrupt()                          # never a second time (safe end)
+    assert link.recv_match() is None
     link.mav.heartbeat_send(1, 2, 3, 4, 5)               # no master: dropped, not raised
     stop = threading.Event()
     link2 = ModuleLink(lambda: None, stop_event=stop)
     threading.Timer(0.1, stop.set).start()
     with pytest.raises(KeyboardInterrupt):
         link2.recv_match(blocking=True, timeout=2)
+    # MAVProxy shutting down and then unloading the module: still only one interrupt
+    assert not link2.interrupt()
     assert link2.recv_match(blocking=True, timeout=0.05) is None
     link.close()
     link.feed(Msg("HEARTBEAT"))

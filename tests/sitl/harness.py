@@ -49,8 +49,14 @@ def run_scenario(tmp: Path, **spec: Any) -> dict:
     if not isolated():
         cmd = [str(sitl / "in-netns"), *cmd]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    out = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env,
-                         timeout=spec.get("wall", 240) + 120)
+    try:
+        out = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env,
+                             timeout=spec.get("wall", 240) + 120)
+    except subprocess.TimeoutExpired:
+        from tests.sitl.scenario import sitl_pids
+        for pid in sitl_pids(tmp / "sitl"):      # never leave a SITL behind
+            os.kill(pid, 9)
+        raise
     lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
     if out.returncode != 0 or not lines:
         raise AssertionError(f"scenario failed (exit {out.returncode}):\n{out.stderr[-4000:]}")

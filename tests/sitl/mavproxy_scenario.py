@@ -2,7 +2,8 @@
 
 ``python -m tests.sitl.mavproxy_scenario SPEC.json`` starts SITL (``start-sitl``, instance 3 by
 default: SERIAL0 on tcp 5790, so it never meets the other SITL tests' instances), starts MAVProxy
-on SERIAL0 with its console on a pipe (``--default-modules=`` : only our module), types
+on SERIAL0 with its console on a pipe (``--default-modules=``: only our module, unless
+``default_modules`` is true), types
 ``module load iterplan`` and ``iterplan run CONTROLLER MAP --out OUT ...``, polls
 ``iterplan status`` every 2 s, optionally acts mid-mission (``action``: ``stop`` types
 ``iterplan stop``, ``unload`` types ``module unload iterplan``, ``quit`` closes MAVProxy's
@@ -44,6 +45,36 @@ def stop_pid(pid: int) -> None:
         except ProcessLookupError:
             return
         time.sleep(0.3)
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except (OSError, ValueError):
+        return []
+
+
+def _is_arduplane(pid: int) -> bool:
+    try:
+        return b"arduplane" in Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return False
+
+
+def stop_sitl(holder: int) -> None:
+    """Stop start-sitl's holder and the SITL it started.  SITL does not always exit when its
+    holder dies (orphans that ignore SIGTERM were seen), so its own process is killed too."""
+    sitl = [c for c in _children(holder) if _is_arduplane(c)]
+    stop_pid(holder)
+    for pid in sitl:
+        end = time.monotonic() + 2.0
+        while _is_arduplane(pid) and time.monotonic() < end:
+            time.sleep(0.1)
+        if _is_arduplane(pid):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
 
 class Console:
@@ -124,8 +155,9 @@ def main(spec_path: str) -> int:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
     cmd = [sys.executable, "-m", "MAVProxy.mavproxy", "--master",
-           f"tcp:127.0.0.1:{5760 + 10 * inst}", "--default-modules=",
-           "--state-basedir", str(work / "mavproxy")]
+           f"tcp:127.0.0.1:{5760 + 10 * inst}", "--state-basedir", str(work / "mavproxy")]
+    if not spec.get("default_modules"):          # MAVProxy's usual modules (wp, param, ...)
+        cmd.append("--default-modules=")
     con = Console(cmd, env, work)
     try:
         con.type(f"module load {spec.get('module', 'iterplan')}")
@@ -177,7 +209,7 @@ def main(spec_path: str) -> int:
     finally:
         if con.proc.poll() is None:
             con.proc.kill()
-        stop_pid(pid)
+        stop_sitl(pid)
     result["console"] = con.text()
     result.update(outputs(out))
     result["wall_s"] = round(time.monotonic() - t_start, 1)

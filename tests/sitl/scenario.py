@@ -113,13 +113,34 @@ def start_sitl(sitl: Path, instance: int, workdir: Path, speedup: float,
     return int(out.stdout.strip())
 
 
-def stop(pid: int) -> None:
+def sitl_pids(workdir: Path) -> list[int]:
+    """ArduPlane processes running in ``workdir`` (SITL may outlive its holder)."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            if (d / "comm").read_text().strip() == "arduplane" \
+                    and Path(os.readlink(d / "cwd")) == workdir.resolve():
+                out.append(int(d.name))
+        except OSError:
+            continue
+    return out
+
+
+def stop(pid: int, workdir: Path | None = None) -> None:
+    """Stop the holder, then SIGKILL whatever SITL process is left in ``workdir``."""
     for sig in (signal.SIGTERM, signal.SIGKILL):
         try:
             os.kill(pid, sig)
         except ProcessLookupError:
-            return
+            break
         time.sleep(0.3)
+    for p in sitl_pids(workdir) if workdir is not None else []:
+        try:
+            os.kill(p, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
 
 
 def iterc_run(spec: dict, port: int, out: Path, extra: list[str]) -> subprocess.Popen:
@@ -186,7 +207,7 @@ def main(spec_path: str) -> int:
                 elif fault == "kill_sitl":
                     obs.close()
                     obs = None
-                    stop(pid)
+                    stop(pid, work / "sitl")
         if obs is not None:
             # Watch until iterc ends (keeps the observer's receive buffer drained).
             end = time.monotonic() + spec.get("wall", 240)
@@ -215,7 +236,7 @@ def main(spec_path: str) -> int:
     finally:
         if obs is not None:
             obs.close()
-        stop(pid)
+        stop(pid, work / "sitl")
     result["wall_s"] = round(time.monotonic() - t_start, 1)
     print(json.dumps(result, default=lambda o: list(o) if isinstance(o, tuple) else str(o)))
     return 0

@@ -1,0 +1,99 @@
+"""What a mission run reads and writes, shared by ``iterc run`` and the MAVProxy module:
+the output folder check (before take-off), the output files written however a run ends, and
+the ``--until LABEL[:K]`` end condition."""
+
+from __future__ import annotations
+
+import csv
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from iterplan_compiler.runtime.bindings import canon
+
+OUTPUTS = ("track.csv", "track.geojson", "events.csv", "summary.json", "track.png",
+           "commands.csv")
+
+
+def check_out(out: Path, inputs: list[Path]) -> str | None:
+    """Problems with ``--out`` found before the mission (so a flight's log is never lost)."""
+    if out.exists() and not out.is_dir():
+        return f"--out {out} exists and is not a folder"
+    resolved = {p.resolve() for p in inputs if p.exists()}
+    if out.resolve() in resolved:
+        return f"--out {out} is an input file"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".iterplan-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        return f"--out {out} is not writable: {exc.strerror or exc}"
+    for name in OUTPUTS:
+        if (out / name).resolve() in resolved:
+            return f"--out {out} would overwrite the input {out / name}"
+    return None
+
+
+def write_outputs(result: Any, out: Path, vehicle: Any, plot: bool) -> None:
+    # A second Ctrl-C must not cut the outputs short.
+    with _interrupts_deferred():
+        for stale in OUTPUTS:               # never leave a previous run's files beside these
+            (out / stale).unlink(missing_ok=True)
+        result.write_track_csv(out / "track.csv")
+        result.write_geojson(out / "track.geojson")
+        result.write_events_csv(out / "events.csv")
+        log = getattr(vehicle, "command_log", None)
+        if log is not None:
+            with open(out / "commands.csv", "w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(["t", "command", "detail"])
+                for t, name, detail in log:
+                    w.writerow([f"{t:.2f}", name, detail])
+        if plot:
+            result.plot(out / "track.png")
+        result.write_summary(out / "summary.json")    # last: its presence marks a whole set
+
+
+@contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Ignore SIGINT/SIGTERM while the outputs are written (the mission has ended anyway)."""
+    try:
+        old = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def parse_until(text: str) -> tuple[str, int] | None:
+    """``LABEL`` or ``LABEL:K`` -> (canonical label, K), or None if malformed."""
+    label, _, count = text.partition(":")
+    label = canon(label)
+    if not label:
+        return None
+    if not count:
+        return label, 1
+    try:
+        k = int(count)
+    except ValueError:
+        return None
+    return (label, k) if k >= 1 else None
+
+
+def until_hook(label: str, k: int) -> Callable[[str, str], bool]:
+    """Executor ``on_event`` hook: True (end the mission) at the k-th event ``label``."""
+    seen = [0]
+
+    def hook(kind: str, event: str) -> bool:
+        if canon(event) != label:
+            return False
+        seen[0] += 1
+        return seen[0] >= k
+    return hook
