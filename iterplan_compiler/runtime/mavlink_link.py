@@ -212,7 +212,7 @@ class MavlinkLink:
                    detail=f"mission_count {len(items)}")
         sent: set[int] = set()
         deadline = time.monotonic() + 10.0
-        while not self._mission_acks:
+        while True:
             if time.monotonic() > deadline:
                 raise MavlinkError("landing: mission upload timed out")
             self._pump(0.05)
@@ -227,8 +227,13 @@ class MavlinkLink:
                                                    int(la * 1e7), int(lo * 1e7), z),
                            detail=f"mission_item {seq}")
                 sent.add(seq)
-        if self._mission_acks[-1] != mav.MAV_MISSION_ACCEPTED:
-            raise MavlinkError(f"landing: mission refused ({self._mission_acks[-1]})")
+            refused = [a for a in self._mission_acks if a != mav.MAV_MISSION_ACCEPTED]
+            if refused:
+                raise MavlinkError(f"landing: mission refused (MISSION_ACK {refused[0]})")
+            if len(sent) == len(items) and self._mission_acks:
+                return
+            # An ACCEPTED ack before the last item went out answers an earlier GUIDED fly-to.
+            self._mission_acks.clear()
 
     def _pump(self, timeout: float) -> None:
         first = True

@@ -330,3 +330,15 @@ def test_refused_mode_change_ends_the_mission(link):
     assert not r.ok and r.reason.startswith("mode change to TAKEOFF refused (FAILED)")
     assert "vehicle is in MANUAL" in r.reason
     assert r.summary["safe_state"] == "disarmed on the ground" and not sim.armed
+
+
+def test_land_uploads_a_landing_mission_and_reports_landed(link):
+    grid, sim, peer, v = airborne(link)
+    v.advance(5)                       # an ACCEPTED fly-to ack may still be in flight: ignored
+    v.land()
+    assert [m.command for m in peer._mission] == [mav.MAV_CMD_NAV_WAYPOINT,
+                                                  mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_NAV_LAND]
+    assert peer.mode == "AUTO" and sim.mode == "LAND"
+    e = wait_for(v, "landed", 400)
+    assert "disarmed" in e.detail or "on the ground" in e.detail
+    assert not [x for x in v.poll_events() if x.kind in ("mode_changed", "disarmed")]
