@@ -5,7 +5,8 @@ the paper's single-board figure: 40,000 locations in 2.9 s on a Raspberry Pi 3B+
 target is 700 k in < 30 ms and 10 M in < 0.3 s on one core).  Prints, for 40 k, 700 k and 10 M
 locations on a 50 m grid: the kernel alone with a fixed arrival heading, with "parallel" arrival
 (either direction, the runtime default), and a full Iterator re-sort (kernel + first-block
-partial sort), best of several runs; then the no-full-sort paths: ``Sorter.best`` (kernel +
+partial sort), best of several runs; the runtime's per-next-location choice (re-sort from the
+arrival pose, parallel arrival, take the first) with and without lower-bound pruning; then the no-full-sort paths: ``Sorter.best`` (kernel +
 argmin) and ``select_smallest`` (the 4096 best, in order) against the ``argpartition`` that the
 Iterator uses today.  ``time`` is wall clock, ``cpu`` process time (less sensitive to other jobs
 on the machine); the load average is printed before and after, because on a shared 2-core VM
@@ -61,8 +62,13 @@ def bench_size(n: int, radius: float) -> None:
     start = Pose(float(xs.mean()) + 10, float(ys.mean()) - 20, 0.3)
     reps = 7 if n <= 1_000_000 else 3
     dubins_lengths(start, xs32[:1000], ys32[:1000], math.pi / 2, radius)  # warm up
-    it = Iterator(ids, xs32, ys32, DistanceSorter(radius, math.pi / 2, parallel=False), start)
+    it = Iterator(ids, xs32, ys32, DistanceSorter(radius, math.pi / 2, parallel=False), start,
+                  prune_min=n + 1)
     par = DistanceSorter(radius, math.pi / 2, parallel=True)
+    # What the runtime does per next-location choice: re-sort R from the arrival pose and take
+    # the first location; with lower-bound pruning (the default for large R) and without.
+    pruned = Iterator(ids, xs32, ys32, par, start)
+    unpruned = Iterator(ids, xs32, ys32, par, start, prune_min=n + 1)
     keys = par.keys(xs32, ys32, ids, start)
     rows = [
         ("kernel, fixed heading", lambda: dubins_lengths(
@@ -70,6 +76,8 @@ def bench_size(n: int, radius: float) -> None:
         ("kernel, parallel", lambda: dubins_lengths(
             start, xs32, ys32, math.pi / 2, radius, parallel=True)),
         ("iterator resort, fixed", lambda: (it.resort(start), it.peek_order(1))),
+        ("next choice, unpruned", lambda: (unpruned.resort(start), unpruned.peek_order(1))),
+        ("next choice, pruned", lambda: (pruned.resort(start), pruned.peek_order(1))),
         ("best(), parallel", lambda: par.best(xs32, ys32, ids, start)),
         ("argpartition 4096", lambda: np.argpartition(keys, min(4095, n - 1))),
         ("select_smallest 4096", lambda: select_smallest(keys, 4096)),

@@ -14,6 +14,16 @@ order and :meth:`Iterator.resort` re-orders it from a (predicted) pose — the e
 queue is fully sorted (``argpartition`` + ``argsort`` of ``block`` elements); the rest is sorted
 block by block when the iterator gets there, so a re-sort costs about one kernel pass.
 
+Pruning (large R, a sorter with :meth:`~iterplan_compiler.runtime.sorter.Sorter.lower_bounds`,
+i.e. ``distance``): a re-sort computes only the cheap lower bounds (the straight-line distance:
+no path is shorter), and a block is sorted by exact keys computed for just the locations that
+can be in it — the ``block`` smallest lower bounds give exact keys whose maximum ``T`` bounds
+the block, every location with a lower bound below ``T`` is scored too, and nothing else can
+belong (its exact key is at least its lower bound, at least ``T``).  The block is then moved to
+the front of the queue by O(block) swaps instead of permuting all of R.  Once blocks grow past
+an eighth of what is left, the rest is scored exactly.  The offered order is that of the exact
+keys, as without pruning (``tests/runtime/test_iterator.py`` checks it).
+
 All per-location data are NumPy arrays; ``remove_next``/``has_next`` are O(1) amortised.
 """
 
@@ -21,9 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from iterplan_compiler.runtime.sorter import Pose, Sorter
+from iterplan_compiler.runtime.sorter import Pose, Sorter, select_smallest
 
 NULL = -1
+#: Prune (see the module docstring) when R has at least this many locations.
+PRUNE_MIN = 65536
 
 
 class Iterator:
@@ -34,7 +46,7 @@ class Iterator:
     """
 
     def __init__(self, ids: np.ndarray, xs: np.ndarray, ys: np.ndarray, sorter: Sorter,
-                 pose: Pose, *, block: int = 4096):
+                 pose: Pose, *, block: int = 4096, prune_min: int = PRUNE_MIN):
         self.ids = np.asarray(ids, dtype=np.int64)
         if len(self.ids) == 0:
             raise ValueError("an iterator needs at least one location")
@@ -42,6 +54,9 @@ class Iterator:
         self.ys = np.asarray(ys, dtype=np.float32)
         self.sorter = sorter
         self.block = int(block)
+        self.prune_min = int(prune_min)
+        self._lb: np.ndarray | None = None   # lower bounds aligned with _queue (pruning)
+        self._pose = pose
         self.done = np.zeros(len(self.ids), dtype=bool)
         self.num_done = 0
         self.resorts = 0
@@ -108,10 +123,22 @@ class Iterator:
     def _order(self, positions: np.ndarray, pose: Pose) -> None:
         self.resorts += 1
         self._queue = positions.copy()
-        self._keys = self.sorter.keys(self.xs[positions], self.ys[positions],
-                                      self.ids[positions], pose)
         self._head = 0
         self._sorted_to = 0
+        self._pose = pose
+        lb = None
+        if len(positions) >= self.prune_min:
+            lb = self.sorter.lower_bounds(self.xs[positions], self.ys[positions], pose)
+        self._lb = lb
+        if lb is None:
+            self._keys = self.sorter.keys(self.xs[positions], self.ys[positions],
+                                          self.ids[positions], pose)
+        else:
+            self._keys = np.zeros(len(positions), dtype=np.float32)
+
+    def _exact(self, idx: np.ndarray) -> np.ndarray:
+        q = self._queue[idx]
+        return self.sorter.keys(self.xs[q], self.ys[q], self.ids[q], self._pose)
 
     def _ensure_sorted(self, upto: int) -> None:
         n = len(self._queue)
@@ -119,6 +146,12 @@ class Iterator:
             lo = self._sorted_to
             # Blocks grow geometrically so a full pass costs O(n log n), not O(n^2 / block).
             hi = min(lo + max(self.block, lo), n)
+            if self._lb is not None:
+                if (hi - lo) * 8 < n - lo:
+                    self._sort_block_pruned(lo, hi)
+                    continue
+                self._keys[lo:] = self._exact(np.arange(lo, n))     # the rest, exactly
+                self._lb = None
             keys = self._keys[lo:]
             if hi < n:
                 # Bring the block's smallest keys to the front, then sort just those.
@@ -129,6 +162,29 @@ class Iterator:
             self._queue[lo:hi] = self._queue[lo:hi][sub]
             self._keys[lo:hi] = self._keys[lo:hi][sub]
             self._sorted_to = hi
+
+    def _sort_block_pruned(self, lo: int, hi: int) -> None:
+        """Put the ``hi - lo`` smallest exact keys of ``_queue[lo:]`` at ``lo:hi`` in order,
+        scoring only the locations that can be among them (module docstring)."""
+        assert self._lb is not None
+        lb = self._lb[lo:]
+        want = hi - lo
+        first = select_smallest(lb, want)
+        bound = float(np.max(self._exact(lo + first)))
+        # float32 kernels: a little slack so rounding cannot exclude a member
+        cand = np.flatnonzero(lb <= bound * (1 + 1e-5) + 1e-3)
+        exact = self._exact(lo + cand)
+        pick = cand[np.argsort(exact, kind="stable")[:want]]
+        chosen = lo + pick                                  # absolute positions, in order
+        front = np.arange(lo, hi)
+        moved_out = front[~np.isin(front, chosen)]          # front slots not chosen ...
+        vacated = chosen[~np.isin(chosen, front)]           # ... go where chosen ones were
+        q, lbs = self._queue, self._lb
+        new_front_q, new_front_lb = q[chosen], lbs[chosen]
+        q[vacated], lbs[vacated] = q[moved_out], lbs[moved_out]
+        q[lo:hi], lbs[lo:hi] = new_front_q, new_front_lb
+        self._keys[lo:hi] = np.sort(exact, kind="stable")[:want]
+        self._sorted_to = hi
 
     def _pop(self) -> int:
         if self._head >= len(self._queue):

@@ -323,6 +323,11 @@ class Sorter:
     def keys(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> np.ndarray:
         raise NotImplementedError
 
+    def lower_bounds(self, xs: np.ndarray, ys: np.ndarray, pose: Pose) -> np.ndarray | None:
+        """Cheap lower bounds of :meth:`keys` (float32), or None when the strategy has none;
+        the Iterator uses them to score only the locations that can come next."""
+        return None
+
     def best(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> int:
         """Index (into the given arrays) of the location a full stable sort by :meth:`keys`
         would put first: the smallest key, ties to the lowest index.  One kernel pass and an
@@ -342,6 +347,15 @@ class DistanceSorter(Sorter):
     def keys(self, xs, ys, ids, pose):
         return dubins_lengths(pose, xs, ys, self.arrival_heading, self.radius,
                               parallel=self.parallel)
+
+    def lower_bounds(self, xs, ys, pose):
+        """Straight-line distance from the pose: no path to a location is shorter."""
+        dx = np.subtract(xs, _F32(pose.x), dtype=np.float32)
+        dy = np.subtract(ys, _F32(pose.y), dtype=np.float32)
+        dx *= dx
+        dy *= dy
+        dx += dy
+        return np.sqrt(dx, out=dx)
 
 
 @dataclass
