@@ -60,6 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "occurs for the K-th time (default K=1), e.g. `--until restart` "
                              "or `--until n.next:2`; a controllable LABEL ends it before the "
                              "action runs")
+    parser.add_argument("--fast-skip", action="store_true",
+                        help="run the controller's skip cycles (has.next ... remove.next over "
+                             "static next-location sensors) for many locations at once; the "
+                             "events and everything the controller observes stay the same")
     parser.add_argument("--max-time", type=_positive, default=4 * 3600.0, metavar="S",
                         help="end the run after S seconds of mission time or of wall time, "
                              "whichever comes first (default 4 h)")
@@ -103,7 +107,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from iterplan_compiler.runtime.bindings import BindingError
+    from iterplan_compiler.runtime.bindings import BindingError, canon
     from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
     from iterplan_compiler.runtime.grid import MapError, load_map
     from iterplan_compiler.runtime.parm import ParmError, read_parm
@@ -146,7 +150,6 @@ def run(args: argparse.Namespace) -> int:
     except MapError as exc:
         return err(f"{args.map}: {exc}")
     if until is not None:
-        from iterplan_compiler.runtime.bindings import canon
         labels = {canon(a) for a in table.controllable | table.uncontrollable}
         if until[0] not in labels:
             return usage(f"--until {until[0]}: the controller has no event of that name")
@@ -182,7 +185,11 @@ def run(args: argparse.Namespace) -> int:
                             end_action=SafeAction(args.on_end),
                             fault_action=SafeAction(args.on_fault),
                             progress=progress, progress_every=60.0,
-                            on_event=until_hook(*until) if until else None)
+                            on_event=until_hook(*until) if until else None,
+                            fast_skip=args.fast_skip,
+                            on_event_labels=frozenset(
+                                a for a in table.controllable | table.uncontrollable
+                                if until and canon(a) == until[0]))
             result = Executor(table, grid, vehicle, config=cfg).run()
         except KeyboardInterrupt:
             return err("interrupted before the mission started; nothing was commanded")

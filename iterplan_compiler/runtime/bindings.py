@@ -81,6 +81,11 @@ class Binding:
     handler: Handler
     completes_on: str | None = None
     answer: str | None = None
+    #: for ``sensor.next`` on a static map sensor: the yes-mask over cell ids and the two
+    #: answers (what the executor's fast skip needs to predict the answer for many cells)
+    mask: np.ndarray | None = None
+    yes: str | None = None
+    no: str | None = None
 
 
 @dataclass
@@ -111,13 +116,20 @@ class Bindings:
         def answer(options: tuple[str, ...]) -> str | None:
             return next((o for o in options if o in unc), None)
 
+        def static_mask(name: str) -> np.ndarray | None:
+            key = name.lower()
+            if key in self.sensors or key not in sensor_names:
+                return None
+            mask = np.zeros(num_cells, dtype=bool)
+            mask[map_sensors[sensor_names[key]]] = True
+            return mask
+
         def sensor_pred(name: str, label: str) -> Callable[[int], bool]:
             key = name.lower()
             if key in self.sensors:
                 return self.sensors[key]
-            if key in sensor_names:
-                mask = np.zeros(num_cells, dtype=bool)
-                mask[map_sensors[sensor_names[key]]] = True
+            mask = static_mask(name)
+            if mask is not None:
                 return lambda cell: bool(mask[cell])
             raise BindingError(
                 f"controller action {label!r} queries sensor {name!r}, but the map defines no "
@@ -132,7 +144,8 @@ class Bindings:
                 y, n = answer(YES_NEXT), answer(NO_NEXT)
                 if y is None or n is None:
                     raise BindingError(f"{label!r} needs answers y.next/n.next in the alphabet")
-                out[label] = Binding("has.next", _has_next(unc[y], unc[n]))
+                out[label] = Binding("has.next", _has_next(unc[y], unc[n]), yes=unc[y],
+                                     no=unc[n])
             elif c == "remove.next":
                 out[label] = Binding("remove.next", _remove_next)
             elif c in ("reset", "reset.iterator"):
@@ -154,8 +167,10 @@ class Bindings:
             elif (m := re.fullmatch(r"(?:is\.)?next\.(.+)", c)) and (
                     f"yes.next.{m.group(1)}" in unc and f"no.next.{m.group(1)}" in unc):
                 x = m.group(1)
-                out[label] = Binding("sensor.next", _sensor_next(
-                    sensor_pred(x, label), unc[f"yes.next.{x}"], unc[f"no.next.{x}"]))
+                yes_l, no_l = unc[f"yes.next.{x}"], unc[f"no.next.{x}"]
+                out[label] = Binding("sensor.next", _sensor_next(sensor_pred(x, label), yes_l,
+                                                                 no_l),
+                                     mask=static_mask(x), yes=yes_l, no=no_l)
             elif (m := re.fullmatch(r"(?:is\.)?(.+)", c)) and (
                     f"yes.{m.group(1)}" in unc and f"no.{m.group(1)}" in unc):
                 x = m.group(1)

@@ -70,6 +70,7 @@ from iterplan_compiler.runtime.results import (  # re-exported
     MissionResult,
     ideal_distance,
 )
+from iterplan_compiler.runtime.skip import Cycle, cycle, static_sensors
 from iterplan_compiler.runtime.sorter import Pose, make_sorter
 from iterplan_compiler.runtime.vehicle import (
     FAULTS,
@@ -123,6 +124,10 @@ class RunConfig:
     #: pace a simulated vehicle at this many simulated seconds per wall second (None: as fast
     #: as possible)
     realtime: float | None = None
+    #: run the controller's skip cycles for many locations at once (``runtime/skip.py``)
+    fast_skip: bool = False
+    #: the labels ``on_event`` needs to see (None: all, which rules out fast skips)
+    on_event_labels: frozenset[str] | None = None
 
 
 class MissionContext:
@@ -208,7 +213,9 @@ class Executor:
         self.arrivals: list[tuple[float, int, float, float]] = []
         self.track: list[tuple[float, float, float, float]] = []
         self.counts = {"steps": 0, "controllable": 0, "uncontrollable": 0, "go": 0,
-                       "arrived": 0, "passes": 0}
+                       "arrived": 0, "passes": 0, "skipped": 0}
+        self._skip_sensors = static_sensors(self.bindings)
+        self._skip_cache: dict[int, dict[int, Cycle | None]] = {}
         self.compute_s = 0.0
         self._mark = self.cfg.compute_clock()   # start of the current think period
         self.t0 = vehicle.time
@@ -331,6 +338,52 @@ class Executor:
     def _check_wall(self) -> None:
         if self._wall_deadline is not None and time.monotonic() > self._wall_deadline:
             raise MissionEnd(False, f"wall-clock limit of {self.cfg.max_wall:.0f} s reached")
+
+    def _fast_skip(self) -> bool:
+        """Skip the run of upcoming locations whose cycle from the current state is a pure skip
+        (``runtime/skip.py``); True if any was skipped."""
+        it, state = self.iterator, self.controller.state
+        if not it.has_next():
+            return False
+        cache = self._skip_cache.setdefault(state, {})
+        sensors = self._skip_sensors
+        wanted = self.cfg.on_event_labels or frozenset()
+        n = it.next
+        first = sum(int(m[n]) << i for i, m in enumerate(sensors.masks))
+        if first not in cache:
+            cache[first] = cycle(state, first, self.table.delta, self.table.controllable,
+                                 self.bindings, sensors, wanted)
+        if cache[first] is None:       # cheap exit: the next location is not a skip
+            return False
+        total = 0
+        k = 64
+        while it.has_next():
+            cells = np.concatenate([[it.next], it.peek_order(k)])
+            codes = sensors.codes(cells)
+            for code in np.unique(codes).tolist():
+                if code not in cache:
+                    cache[code] = cycle(state, code, self.table.delta, self.table.controllable,
+                                        self.bindings, sensors, wanted)
+            ok = np.fromiter((cache[c] is not None for c in codes.tolist()), bool, len(codes))
+            j = int(np.argmin(ok)) if not ok.all() else len(codes)
+            if j == 0:
+                break
+            for code, n in zip(*np.unique(codes[:j], return_counts=True), strict=True):
+                cyc = cache[int(code)]
+                assert cyc is not None
+                c = cyc.controllable
+                self.counts["steps"] += int(n) * len(cyc.events)
+                self.counts["controllable"] += int(n) * c
+                self.counts["uncontrollable"] += int(n) * (len(cyc.events) - c)
+            it.skip_run(j)
+            total += j
+            if j < len(codes):
+                break
+            k = min(4 * k, 1 << 20)
+        if total:
+            self.counts["skipped"] += total
+            self.log_entry("x", f"fast skip: {total} locations")
+        return total > 0
 
     def _physical_tick(self, dt: float) -> None:
         self.vehicle.advance(dt)
@@ -461,6 +514,8 @@ class Executor:
         controllable = self.table.controllable
         choices = {s: sorted(a for a in m if a in controllable) for s, m in delta.items()}
         progress_kinds = ("remove.next", "reset", "go.next")
+        skipping = cfg.fast_skip and cfg.choose is None and bool(self._skip_sensors.labels) \
+            and (on_event is None or cfg.on_event_labels is not None)
         since = 0           # steps since the last wait or iterator progress (livelock guard)
         n = 0
         self._mark = perf()
@@ -491,6 +546,9 @@ class Executor:
                     if cfg.passes and counts["passes"] >= cfg.passes:
                         self.settle_compute()
                         return
+                continue
+            if skipping and self._fast_skip():
+                since = 0
                 continue
             enabled = choices[ctrl.state]
             if enabled:

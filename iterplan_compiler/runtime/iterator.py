@@ -91,6 +91,20 @@ class Iterator:
             self.num_done += 1
         self._n = self._pop()
 
+    def skip_run(self, j: int) -> None:
+        """``remove_next`` ``j`` times at once: ``n`` and the next ``j - 1`` locations in
+        offered order go to D, the one after becomes ``n`` (the executor's fast skip)."""
+        if self._n == NULL:
+            raise RuntimeError("skip_run with a null next location")
+        if j <= 0:
+            return
+        self._ensure_sorted(self._head + j - 1)
+        pos = np.concatenate([[self._n], self._queue[self._head:self._head + j - 1]])
+        self.num_done += int(np.count_nonzero(~self.done[pos]))
+        self.done[pos] = True
+        self._head += len(pos) - 1
+        self._n = self._pop()
+
     def reset(self, pose: Pose) -> None:
         """Re-initialise: D = ∅, n = the best location of L for ``pose``, R = L \\ {n}."""
         self.done[:] = False
