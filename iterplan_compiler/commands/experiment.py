@@ -45,6 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--budget", type=float, default=None,
                         help="synthesis-table: seconds per synthesis (default 60, quick 10)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--fast-skip", action="store_true",
+                        help="fig3b: the runtime's fast skip of the controller's skip cycles "
+                             "(same controller behaviour, less iteration overhead)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -100,7 +103,7 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     if problem:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
-    runner = missions.Runner(str(out / "controllers"))
+    runner = missions.Runner(str(out / "controllers"), fast_skip=args.fast_skip)
     prog = harness.Progress(len(cases), name, enabled=not args.no_progress)
     partial = out / f"{name}.partial.csv"
     fields = harness.CASE_FIELDS + harness.RESULT_FIELDS

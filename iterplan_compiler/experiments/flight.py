@@ -73,9 +73,12 @@ def example_bindings(grid, data: dict | None):
 def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
-        map_data: dict | None = None, full_log: bool = False) -> FlightResult:
+        map_data: dict | None = None, full_log: bool = False,
+        fast_skip: bool = False) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
-    ``max_time`` simulated seconds).  Raises :class:`StageError` if the runtime is missing or
+    ``max_time`` simulated seconds).  ``fast_skip``: the executor's fast skip
+    (``runtime/skip.py``), with ``has.next``/``y.next`` left out of the compact log so that
+    skip cycles can be skipped.  Raises :class:`StageError` if the runtime is missing or
     the module cannot be loaded."""
     try:
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
@@ -90,7 +93,7 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         raise StageError("runtime", str(exc)) from None
 
     events: list[LogEvent] = []
-    keep = None if full_log else KEEP
+    keep = None if full_log else (KEEP - {"has.next", "y.next"} if fast_skip else KEEP)
     holder: dict = {}
 
     def on_controller_event(kind: str, label: str) -> bool:
@@ -120,7 +123,10 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
                     max_time=max_time, log_limit=0, end_action=SafeAction.LOITER,
                     fault_action=SafeAction.LOITER,
-                    compute_clock=time.process_time, on_event=on_controller_event)
+                    compute_clock=time.process_time, on_event=on_controller_event,
+                    fast_skip=fast_skip,
+                    on_event_labels=(KEEP - {"has.next", "y.next"}) if fast_skip and not full_log
+                    else None)
     try:
         # map_data=None: the rules load_map put on the grid (the executor applies them itself).
         bindings = None if map_data is None else example_bindings(grid, map_data)
