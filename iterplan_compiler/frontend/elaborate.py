@@ -55,7 +55,24 @@ PLANT_KEYWORDS = frozenset({"plant", "controlled_det"})
 UNSUPPORTED_AT_BUILD: frozenset[str] = frozenset()
 UNSUPPORTED_KEYWORDS = frozenset({"closure", "abstract", "optimistic", "pessimistic",
                                   "component", "rtc", "rtcAnalysis", "probabilistic", "mdp"})
-MAX_STATES = 2_000_000
+#: None: the --max-states limit of limits.py (tests may set a number)
+MAX_STATES: int | None = None
+
+
+def _max_states() -> int:
+    from iterplan_compiler import limits
+
+    return MAX_STATES if MAX_STATES is not None else limits.current().max_states
+
+
+def _synthesis_errors() -> tuple[type[BaseException], ...]:
+    """The exceptions of the synthesis stage that are about the *input* (a diagnostic, exit 1);
+    every other exception is a compiler bug and must reach the CLI's exit 3 handler."""
+    try:
+        encode = importlib.import_module("iterplan_compiler.synthesis.encode")
+    except ImportError:
+        return ()
+    return (encode.SynthesisError, encode.PreconditionFailure)
 
 
 def relabel(lts: LTS, mapping: Mapping[str, list[str]]) -> LTS:
@@ -453,7 +470,7 @@ class Elaborator(ModelBackend):
             from iterplan_compiler.ir.compose import StateExplosion, compose
 
             try:
-                return compose(machines, "DEFAULT", max_states=MAX_STATES)
+                return compose(machines, "DEFAULT", max_states=_max_states())
             except StateExplosion as e:
                 diags.append(error("E0402", f"composing DEFAULT: {e}", span))
                 return None
@@ -516,7 +533,7 @@ class Elaborator(ModelBackend):
             controllable = frozenset(self.sets[named[0]])
             source = f"set {named[0]}"
         res = is_legal(machines[0], machines[1], controllable, context=machines[2:],
-                       max_states=MAX_STATES)
+                       max_states=_max_states())
         pair = f"controller {machines[0].name}, plant {machines[1].name}, controllable = {source}"
         if res.legal:
             return True, f"legal ({pair}; {res.product_states} states)"
@@ -579,7 +596,7 @@ class Elaborator(ModelBackend):
         from iterplan_compiler.ir.compose import StateExplosion, compose
 
         try:
-            return compose(machines, inst, self._priority(d, env), max_states=MAX_STATES)
+            return compose(machines, inst, self._priority(d, env), max_states=_max_states())
         except StateExplosion as e:
             diags.append(error("E0402", f"composing {inst}: {e}", d.span))
             return None
@@ -611,7 +628,8 @@ class Elaborator(ModelBackend):
                                    "(iterplan_compiler.synthesis.encode), which is not "
                                    "available", d.span))
                 return None
-            except Exception as e:  # SynthesisError: an unsupported goal
+            except _synthesis_errors() as e:
+                # an unsupported goal; any other exception is a bug and propagates (exit 3)
                 diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
                 return None
         lts = self._compose(machines, d, env, inst, diags)
@@ -867,7 +885,7 @@ class Elaborator(ModelBackend):
         if all(ops.is_deterministic(m) for m in machines):
             return problem
         try:
-            plant = compose(machines, problem.name, max_states=MAX_STATES)
+            plant = compose(machines, problem.name, max_states=_max_states())
         except StateExplosion as e:
             diags.append(error("E0402", f"composing the plant of {problem.name}: {e}", d.span))
             return None
@@ -893,7 +911,7 @@ class Elaborator(ModelBackend):
             diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
                                "available in this build", d.span))
             return None
-        except Exception as e:  # SynthesisError (e.g. a temporal goal) or a synthesis bug
+        except _synthesis_errors() as e:  # e.g. a temporal goal; a bug propagates (exit 3)
             diags.append(error("E0901", f"compatibility check of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
             return None
@@ -914,7 +932,7 @@ class Elaborator(ModelBackend):
         diags: list[Diagnostic] = []
         try:
             plant = compose([*problem.plant, *problem.safety], f"{name}_#NC#",
-                            max_states=MAX_STATES)
+                            max_states=_max_states())
         except StateExplosion as e:
             return None, [error("E0402", f"composing the plant of {name}: {e}", d.span)]
         env = self.env().with_params(self._params(d.params, (), d.name, d.span))
@@ -946,8 +964,9 @@ class Elaborator(ModelBackend):
             return None
         try:
             result = synthesize(problem)
-        except Exception as e:  # a synthesis bug must not look like a front-end crash
-            diags.append(error("E0901", f"synthesis of {d.name} failed: {e}", d.span))
+        except _synthesis_errors() as e:  # synthesize reports these itself; a bug propagates
+            diags.append(error("E0901", f"synthesis of {d.name} failed: "
+                               f"{getattr(e, 'message', e)}", d.span))
             return None
         if not result.realizable:
             self.unrealizable.add(inst)

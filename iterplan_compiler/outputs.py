@@ -1,0 +1,179 @@
+"""Writing output files safely: atomically, never over an input, appendable result logs.
+
+Every file iterc writes goes through :func:`atomic_write_text` / :func:`atomic_write_bytes`:
+the content is written to a temporary file *in the target's folder* (same file system),
+flushed and ``fsync``-ed, then renamed over the target with :func:`os.replace` (atomic on
+POSIX and Windows), and the folder is ``fsync``-ed so the rename survives a power cut.  A
+process killed at any point leaves either the old file intact or the new one complete --
+never a 0-byte or truncated file (a stray ``.NAME.*.tmp`` at most, removed on the next
+successful write of NAME is not promised; they are named so they are easy to spot).
+
+:func:`refuse_overwrite_input` stops ``iterc compile x.lts -o x.lts`` before any work is done.
+:func:`append_line` appends one complete line (a CSV row, a JSON line) with a single
+``write`` on an ``O_APPEND`` descriptor and ``fsync``, so a result log grows one finished
+record at a time and a killed run can resume from it.
+
+Test hook: with the environment variable ``ITERPLAN_TEST_KILL_AT=NAME`` the process kills
+itself with SIGKILL at write point NAME (``before-replace`` -- temp file complete, not yet
+renamed --, ``mid-write`` -- half the bytes written --, ``after-replace``, ``mid-append``),
+which is how tests/outputs/test_kill.py shows the guarantee.
+
+Stdlib only: the runtime (which ships to the aircraft) may import this module.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+
+__all__ = ["OutputError", "atomic_write_text", "atomic_write_bytes", "refuse_overwrite_input",
+           "append_line", "check_writable_dir"]
+
+KILL_ENV = "ITERPLAN_TEST_KILL_AT"
+
+
+class OutputError(Exception):
+    """An output cannot be written (a user error: exit 1); ``message`` says why."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+
+def _kill_point(name: str) -> None:
+    if os.environ.get(KILL_ENV) == name:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _fsync_dir(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # e.g. Windows: folders cannot be opened; the rename is still atomic
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temp file in the same folder + fsync + rename).
+
+    The new file gets the old file's permission bits if it existed, else the usual ``0o666``
+    minus the umask.  Raises :class:`OSError` as ``open`` would (no such folder, read-only...).
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name[:100]}.", suffix=".tmp", dir=folder)
+    try:
+        try:
+            mode = os.stat(target).st_mode & 0o7777
+        except OSError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        with os.fdopen(fd, "wb") as f:
+            half = len(data) // 2
+            f.write(data[:half])
+            if os.environ.get(KILL_ENV) == "mid-write":
+                f.flush()
+                _kill_point("mid-write")
+            f.write(data[half:])
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, mode)
+        _kill_point("before-replace")
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    _fsync_dir(folder)
+    _kill_point("after-replace")
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str, encoding: str = "utf-8") -> None:
+    """:func:`atomic_write_bytes` of ``text`` encoded (newlines written as given)."""
+    atomic_write_bytes(path, text.encode(encoding))
+
+
+def append_line(path: str | os.PathLike[str], line: str, encoding: str = "utf-8") -> None:
+    """Append one complete line to ``path`` (created if missing), durably.
+
+    The line goes out in one ``write`` on an ``O_APPEND`` descriptor and is fsync-ed before
+    returning.  A kill during the write can leave at most a partial *last* line, which
+    :func:`complete_lines` drops when the file is read back."""
+    if not line.endswith("\n"):
+        line += "\n"
+    data = line.encode(encoding)
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+    try:
+        if os.environ.get(KILL_ENV) == "mid-append":
+            os.write(fd, data[: len(data) // 2])
+            _kill_point("mid-append")
+        os.write(fd, data)
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def complete_lines(path: str | os.PathLike[str], encoding: str = "utf-8") -> list[str]:
+    """The complete (newline-terminated) lines of an appended log, without the newline; a
+    partial last line (a write that was killed) is dropped, and cut off the file so the next
+    :func:`append_line` starts on a fresh line."""
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        return []
+    end = data.rfind(b"\n") + 1
+    if end < len(data):
+        with open(path, "r+b") as f:
+            f.truncate(end)
+    return data[:end].decode(encoding, errors="replace").splitlines()
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        try:
+            return a.resolve() == b.resolve()
+        except (OSError, RuntimeError):
+            return False
+
+
+def refuse_overwrite_input(out: str | os.PathLike[str] | None,
+                           inputs: Iterable[str | os.PathLike[str] | None]) -> None:
+    """:class:`OutputError` if ``out`` names one of ``inputs`` (same file, through links or
+    relative paths too), so ``iterc compile x.lts -o x.lts`` fails before doing any work."""
+    if out is None:
+        return
+    o = Path(out)
+    for i in inputs:
+        if i is not None and _same_file(o, Path(i)):
+            raise OutputError(f"refusing to overwrite the input file {i} with an output "
+                              "(choose another output name)")
+
+
+def check_writable_dir(folder: str | os.PathLike[str]) -> None:
+    """:class:`OutputError` unless ``folder`` exists (or can be created) and is writable --
+    checked *before* a long run, so its outputs are not lost at the end."""
+    p = Path(folder)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise OutputError(f"cannot create the output folder {p}: {e.strerror or e}") from None
+    if not p.is_dir():
+        raise OutputError(f"the output path {p} is not a folder")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".iterplan-probe.", dir=p)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as e:
+        raise OutputError(f"cannot write in the output folder {p}: {e.strerror or e}") from None
