@@ -608,6 +608,25 @@ class _HomeCell(_Strict):
     cell: Annotated[str, Field(strict=True, min_length=1, max_length=100)]
 
 
+def _kind(list_tag: str, dict_tag: str):
+    def kind(v: Any) -> str | None:
+        return list_tag if isinstance(v, list | tuple) else dict_tag if isinstance(v, dict) \
+            else None
+    return kind
+
+
+_Home = Annotated[
+    Union[Annotated[_LatLon, Tag("<latlon>")], Annotated[_HomeCell, Tag("<cell>")]],  # noqa: UP007
+    Discriminator(_kind("<latlon>", "<cell>"), custom_error_type="home",
+                  custom_error_message="expected [lat, lon] or {\"cell\": NAME}")]
+_PolygonArea = Annotated[
+    Union[Annotated[Annotated[list[_Position], Field(min_length=3)], Tag("<ring>")],  # noqa: UP007
+          Annotated[_GPolygon, Tag("<polygon>")]],
+    Discriminator(_kind("<ring>", "<polygon>"), custom_error_type="polygon",
+                  custom_error_message="expected a list of [lon, lat] vertices or a GeoJSON "
+                  "Polygon")]
+
+
 class _MapFile(_Strict):
     name: Annotated[str, Field(strict=True, max_length=200)] = "map"
     description: _Str | None = None
@@ -616,8 +635,8 @@ class _MapFile(_Strict):
     cols: Annotated[int, Field(strict=True, gt=0, le=MAX_MAP_CELLS)] | None = None
     rows: Annotated[int, Field(strict=True, gt=0, le=MAX_MAP_CELLS)] | None = None
     bbox: tuple[_Lat, _Lon, _Lat, _Lon] | None = None  # south, west, north, east
-    polygon: Annotated[list[_Position], Field(min_length=3)] | _GPolygon | None = None
-    home: _LatLon | _HomeCell | None = None
+    polygon: _PolygonArea | None = None
+    home: _Home | None = None
     altitude: _finite(hi=10_000.0, gt=0.0) = 60.0
     arrival_heading: _finite(-360.0, 360.0) = 0.0
     sensors: dict[Annotated[str, Field(strict=True, min_length=1, max_length=200)],
@@ -667,14 +686,19 @@ def json_path(loc: Sequence[Any]) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
-        elif isinstance(part, str) and part.startswith("<") and part.endswith(">"):
-            continue  # a tag of the cell-set union
+        elif isinstance(part, str) and (part.startswith("<") and part.endswith(">")
+                                        or part in _GEOJSON_TYPES):
+            continue  # a tag of a union (cell set, home, polygon, GeoJSON type)
         elif isinstance(part, str) and part.replace("_", "a").isalnum() and \
                 not part[:1].isdigit():
             out += f".{part}"
         else:
             out += "[" + json.dumps(str(part)) + "]"
     return out
+
+
+_GEOJSON_TYPES = frozenset({"Point", "MultiPoint", "Polygon", "MultiPolygon",
+                            "GeometryCollection", "Feature", "FeatureCollection"})
 
 
 def _message(err: dict) -> str:
@@ -687,6 +711,9 @@ def _message(err: dict) -> str:
         msg = msg.removeprefix("Value error, ")
     elif typ == "greater_than" and ctx.get("gt") == 0:
         msg = f"must be positive, got {_short(err.get('input'))}"
+    elif typ == "too_long" and ctx.get("max_length") == 2 and ctx.get("field_type") == "Tuple":
+        msg = (f"a position is 2 numbers ([lon, lat] in GeoJSON, [lat, lon] elsewhere), not "
+               f"{ctx.get('actual_length')}: 3-D positions are not supported")
     elif typ == "finite_number":
         msg = f"must be a finite number, got {_short(err.get('input'))}"
     elif typ == "extra_forbidden":
@@ -820,7 +847,11 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
     try:
         grid.dynamic, grid.derived = parse_sensor_rules(data, grid.sensors)
     except MapError as exc:
-        raise MapError(f"{label}: {exc}") from None
+        import re
+
+        m = re.match(r"(dynamic|derived) sensor '([^']*)'", str(exc))
+        where = json_path((m[1], m[2])) if m else "$"
+        raise MapError(f"{label}: {where}: {exc}") from None
     return grid
 
 
