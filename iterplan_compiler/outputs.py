@@ -5,8 +5,8 @@ the content is written to a temporary file *in the target's folder* (same file s
 flushed and ``fsync``-ed, then renamed over the target with :func:`os.replace` (atomic on
 POSIX and Windows), and the folder is ``fsync``-ed so the rename survives a power cut.  A
 process killed at any point leaves either the old file intact or the new one complete --
-never a 0-byte or truncated file (a stray ``.NAME.*.tmp`` at most, removed on the next
-successful write of NAME is not promised; they are named so they are easy to spot).
+never a 0-byte or truncated file (at most a stray hidden ``.NAME.*.tmp`` temp file beside it,
+named so it is easy to spot and delete).
 
 :func:`refuse_overwrite_input` stops ``iterc compile x.lts -o x.lts`` before any work is done.
 :func:`append_line` appends one complete line (a CSV row, a JSON line) with a single
@@ -14,9 +14,10 @@ successful write of NAME is not promised; they are named so they are easy to spo
 record at a time and a killed run can resume from it.
 
 Test hook: with the environment variable ``ITERPLAN_TEST_KILL_AT=NAME`` the process kills
-itself with SIGKILL at write point NAME (``before-replace`` -- temp file complete, not yet
-renamed --, ``mid-write`` -- half the bytes written --, ``after-replace``, ``mid-append``),
-which is how tests/outputs/test_kill.py shows the guarantee.
+itself with SIGKILL at write point NAME (``mid-write`` -- half the bytes in the temp file --,
+``before-replace`` -- temp file complete, not yet renamed --, ``after-replace``,
+``mid-append`` -- half a line appended --, ``after-append``); ``NAME:K`` dies at the K-th
+passage.  tests/robustness/test_outputs.py shows the guarantee at every point.
 
 Stdlib only: the runtime (which ships to the aircraft) may import this module.
 """
@@ -44,8 +45,24 @@ class OutputError(Exception):
         self.message = message
 
 
+_hits: dict[str, int] = {}
+
+
+def _armed(name: str) -> bool:
+    """True if ``ITERPLAN_TEST_KILL_AT`` asks to die at this passage of point ``name``
+    (``NAME`` -- the first time --, or ``NAME:K`` -- the K-th time)."""
+    want = os.environ.get(KILL_ENV)
+    if not want:
+        return False
+    point, _, k = want.partition(":")
+    if point != name:
+        return False
+    _hits[name] = _hits.get(name, 0) + 1
+    return _hits[name] == (int(k) if k.isdigit() else 1)
+
+
 def _kill_point(name: str) -> None:
-    if os.environ.get(KILL_ENV) == name:
+    if _armed(name):
         os.kill(os.getpid(), signal.SIGKILL)
 
 
@@ -81,9 +98,9 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
         with os.fdopen(fd, "wb") as f:
             half = len(data) // 2
             f.write(data[:half])
-            if os.environ.get(KILL_ENV) == "mid-write":
+            if _armed("mid-write"):
                 f.flush()
-                _kill_point("mid-write")
+                os.kill(os.getpid(), signal.SIGKILL)
             f.write(data[half:])
             f.flush()
             os.fsync(f.fileno())
@@ -114,11 +131,12 @@ def append_line(path: str | os.PathLike[str], line: str, encoding: str = "utf-8"
     data = line.encode(encoding)
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
     try:
-        if os.environ.get(KILL_ENV) == "mid-append":
+        if _armed("mid-append"):
             os.write(fd, data[: len(data) // 2])
-            _kill_point("mid-append")
+            os.kill(os.getpid(), signal.SIGKILL)
         os.write(fd, data)
         os.fsync(fd)
+        _kill_point("after-append")
     finally:
         os.close(fd)
 
