@@ -42,9 +42,6 @@ COMMANDS: dict[str, str] = {
 
 #: commands that compile specs and so take the resource-limit flags (limits.py)
 LIMITED_COMMANDS = frozenset({"check", "lts", "verify", "synth", "compile", "dot"})
-#: diagnostic code of each limit when it is reported outside a located diagnostic
-LIMIT_CODES = {"max_int_bits": "E0208", "max_states": "E0402",
-               "max_temporal_depth": "E0603", "time_limit": "E0404"}
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -92,7 +89,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_USAGE
+    previous = limits.set_limits()  # restored on return: in-process callers (tests) share it
     limits.apply(args)
+    if argv is None and args.command in LIMITED_COMMANDS:
+        # the real command line (not an in-process caller such as a test): enforce the
+        # memory and time limits even inside a long BDD operation
+        limits.start_watchdog(exit_code=EXIT_FAIL)
+    try:
+        return _run(args)
+    finally:
+        limits.stop_watchdog()
+        limits.set_limits(previous)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(_load(args.command).run(args))
     except KeyboardInterrupt:
@@ -102,8 +112,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_OK
     except limits.LimitReached as e:
         # a resource limit reached outside a stage that turns it into a located diagnostic
-        print(f"iterc: error[{LIMIT_CODES.get(e.field, 'E0404')}]: {e.message}",
-              file=sys.stderr)
+        print(f"iterc: error[{e.code}]: {e.message}", file=sys.stderr)
         return EXIT_FAIL
     except RecursionError:
         # The front-end turns deep nesting of the *input* into diagnostic E0005 where it

@@ -14,8 +14,21 @@ integer size (bits)    ``--max-int-bits``      integer literals (before conversi
 states of a machine    ``--max-states``        while composing (each new state), E0402
 temporal depth         ``--max-temporal-depth`` nesting of X/U/W/[]/<> in a formula,
                                                before building its automaton, E0603
-wall time (seconds)    ``--time-limit``        at the state-count check points, E0404
+temporal size          ``--max-temporal-ops``  distinct X/U/W/[]/<> subformulas of a
+                                               formula (its automaton can have 2^n
+                                               states), before building it, E0603
+declarations           ``--max-declarations``  top-level definitions of one file, counted
+                                               before parsing it (parsing is ~1 ms each), E0006
+memory (MB)            ``--max-memory``        resident set size, sampled 4x a second by a
+                                               watchdog thread (BDD nodes included), E0405
+wall time (seconds)    ``--time-limit``        at the state-count check points, and by
+                                               the watchdog (even inside a BDD operation),
+                                               E0404
 =====================  ======================  ==========================================
+
+The watchdog (:func:`start_watchdog`, started by ``iterc`` itself, not by library callers)
+ends the process with exit 1 and the diagnostic when the memory or time limit is passed,
+wherever the program is -- a long BDD operation in CUDD included.
 
 This module is stdlib-only and imports nothing else from iterplan.
 """
@@ -24,6 +37,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import sys
+import threading
 import time
 from dataclasses import dataclass, replace
 
@@ -38,6 +54,9 @@ class Limits:
     max_int_bits: int = 1024
     max_states: int = 300_000
     max_temporal_depth: int = 12
+    max_temporal_ops: int = 10
+    max_declarations: int = 2_000
+    max_memory_mb: int = 1_536
     time_limit: float = 0.0
 
 
@@ -49,8 +68,19 @@ FLAGS: dict[str, tuple[str, str]] = {
     "max_states": ("--max-states", "states of any composed machine (checked while composing)"),
     "max_temporal_depth": ("--max-temporal-depth",
                            "nesting depth of temporal operators (X U W [] <>) in a formula"),
+    "max_temporal_ops": ("--max-temporal-ops",
+                         "distinct temporal subformulas (X U W [] <>) in one formula"),
+    "max_declarations": ("--max-declarations",
+                         "top-level declarations in one file (checked before parsing)"),
+    "max_memory_mb": ("--max-memory", "MB of memory (resident set) for the command"),
     "time_limit": ("--time-limit", "seconds of wall time for the command (0: none)"),
 }
+
+#: the diagnostic code of each limit
+CODES: dict[str, str] = {"max_int_bits": "E0208", "max_states": "E0402",
+                         "max_temporal_depth": "E0603", "max_temporal_ops": "E0603",
+                         "max_declarations": "E0006", "max_memory_mb": "E0405",
+                         "time_limit": "E0404"}
 
 _current = DEFAULT
 _started = time.monotonic()
@@ -63,6 +93,10 @@ class LimitReached(Exception):
         super().__init__(message)
         self.field = field
         self.message = message
+
+    @property
+    def code(self) -> str:
+        return CODES.get(self.field, "E0404")
 
 
 def current() -> Limits:
@@ -173,6 +207,41 @@ def power_too_large(base_bits: int, exponent: int) -> str | None:
     return None
 
 
+# ------------------------------------------------------------------ formula size
+
+_TEMPORAL = frozenset({"Next", "Always", "Eventually", "Until", "WeakUntil"})
+
+
+def formula_too_large(formula: object) -> str | None:
+    """A message if ``formula`` (an :mod:`iterplan_compiler.ir.formulas` tree) nests temporal
+    operators deeper than ``--max-temporal-depth`` or has more distinct temporal subformulas
+    than ``--max-temporal-ops`` -- decided by one walk, before any automaton is built (the
+    tableau's size is exponential in both)."""
+    depth_max = 0
+    temporal: set[object] = set()
+    stack = [(formula, 0)]
+    while stack:
+        f, d = stack.pop()
+        if type(f).__name__ in _TEMPORAL:
+            d += 1
+            try:
+                temporal.add(f)  # structural: a repeated subformula counts once
+            except (RecursionError, TypeError):  # hashing a very deep (or odd) tree
+                temporal.add(id(f))
+        depth_max = max(depth_max, d)
+        for child in ("arg", "left", "right"):
+            sub = getattr(f, child, None)
+            if sub is not None:
+                stack.append((sub, d))
+    if depth_max > _current.max_temporal_depth:
+        return (f"the formula nests temporal operators {depth_max} deep: "
+                f"{hint('max_temporal_depth')}")
+    if len(temporal) > _current.max_temporal_ops:
+        return (f"the formula has {len(temporal)} temporal subformulas (its automaton may "
+                f"have 2^{len(temporal)} states): {hint('max_temporal_ops')}")
+    return None
+
+
 # ------------------------------------------------------------------ state count, wall time
 
 
@@ -198,3 +267,67 @@ def check_deadline() -> None:
 
 def elapsed() -> float:
     return time.monotonic() - _started
+
+
+# ------------------------------------------------------------------ watchdog (memory, time)
+
+
+def rss_mb() -> float:
+    """The process's resident set size in MB (peak RSS where /proc is not available)."""
+    try:
+        with open("/proc/self/statm") as f:
+            pages = int(f.read().split()[1])
+        return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, ValueError, IndexError, AttributeError):
+        try:
+            import resource
+
+            peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+            return peak / (2**20 if sys.platform == "darwin" else 2**10)
+        except (ImportError, OSError):
+            return 0.0
+
+
+_watchdog_stop: threading.Event | None = None
+
+
+def watchdog_breach() -> tuple[str, str] | None:
+    """``(code, message)`` if the memory or time limit is passed now."""
+    mem = rss_mb()
+    if mem > _current.max_memory_mb:
+        return "E0405", (f"the command uses {mem:,.0f} MB of memory: "
+                         f"{hint('max_memory_mb')} (MB)")
+    msg = deadline_passed()
+    if msg is not None:
+        return "E0404", msg
+    return None
+
+
+def start_watchdog(interval: float = 0.25, *, exit_code: int = 1) -> None:
+    """Check memory and time every ``interval`` s in a daemon thread; on a breach print
+    ``iterc: error[CODE]: message`` and end the process at once with ``exit_code`` (outputs
+    are written atomically, so nothing half-written is left)."""
+    global _watchdog_stop
+    stop_watchdog()
+    stop = threading.Event()
+    _watchdog_stop = stop
+
+    def loop() -> None:
+        while not stop.wait(interval):
+            breach = watchdog_breach()
+            if breach is not None:
+                try:
+                    sys.stdout.flush()
+                except (OSError, ValueError):
+                    pass
+                os.write(2, f"iterc: error[{breach[0]}]: {breach[1]}\n".encode())
+                os._exit(exit_code)
+
+    threading.Thread(target=loop, name="iterplan-limits-watchdog", daemon=True).start()
+
+
+def stop_watchdog() -> None:
+    global _watchdog_stop
+    if _watchdog_stop is not None:
+        _watchdog_stop.set()
+        _watchdog_stop = None

@@ -29,6 +29,7 @@ from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.fltl.emptiness import (
     Analysis,
@@ -273,6 +274,9 @@ def check_assert(
     max_states: int = DEFAULT_MAX_STATES,
 ) -> tuple[CheckResult | None, list[Diagnostic]]:
     """:func:`model_check` with diagnostics instead of exceptions for bad input."""
+    too_large = limits.formula_too_large(named.formula)
+    if too_large is not None:
+        return None, [error("E0603", f"assert {named.name}: {too_large}", named.span)]
     try:
         return model_check(lts, named.formula, fluents, fair=fair, max_states=max_states), []
     except UnknownFluentError as exc:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
 from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
 from iterplan_compiler.fltl.progression import FormulaAutomaton, State
@@ -120,6 +121,9 @@ def safety_lts(
     """
     kind = "constraint" if constraint else "ltl_property"
     diags: list[Diagnostic] = []
+    too_large = limits.formula_too_large(named.formula)
+    if too_large is not None:
+        return None, [error("E0603", f"{kind} {named.name}: {too_large}", named.span)]
     try:
         dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)

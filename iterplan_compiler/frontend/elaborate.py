@@ -382,6 +382,8 @@ class Elaborator(ModelBackend):
     def build_lts(self, name: str, unrealizable: str = "error"
                   ) -> tuple[LTS | None, list[Diagnostic]]:
         """See :meth:`Model.build_lts`."""
+        from iterplan_compiler import limits
+
         try:
             lts, diags = self._build_top(name)
         except RecursionError:
@@ -389,6 +391,11 @@ class Elaborator(ModelBackend):
 
             self.building.clear()
             return None, [too_deep(self.spec.path)]
+        except limits.LimitReached as e:  # e.g. the winning region of a game: a diagnostic
+            self.building.clear()
+            d = self.composites.get(name) or self.processes.get(name)
+            span = d.span if d is not None else Span(self.spec.path, 0, 0)
+            return None, [error(e.code, f"building {name}: {e.message}", span)]
         if unrealizable == "plant" and lts is None and name in self.unrealizable:
             plant, ds = self.unrealizable_plant(name)
             if plant is not None:

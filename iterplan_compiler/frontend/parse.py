@@ -95,6 +95,16 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
     uses this; elaboration has no modal semantics, so :func:`frontend.load` never sets it).
     """
     diags: list[Diagnostic] = []
+    cap = limits.current().max_declarations
+    n_decls = 0
+    for m in _DOT_RE.finditer(text):
+        if m.group(0) == ".":
+            n_decls += 1
+            if n_decls > cap:
+                line = text.count("\n", 0, m.start()) + 1
+                return S.SpecFile(path, ()), [error(
+                    "E0006", f"the file has more than {cap:,} top-level declarations: "
+                    f"{limits.hint('max_declarations')}", Span(path, line, 1))]
     lark = parser()
     decl_states = _decl_start_states(lark)
 
