@@ -55,6 +55,8 @@ PLANT_KEYWORDS = frozenset({"plant", "controlled_det"})
 UNSUPPORTED_AT_BUILD: frozenset[str] = frozenset()
 UNSUPPORTED_KEYWORDS = frozenset({"closure", "abstract", "optimistic", "pessimistic",
                                   "component", "rtc", "rtcAnalysis", "probabilistic", "mdp"})
+#: process instances spliced into one another (``P(N) = (a -> P(N+1))``) at most
+MAX_INSTANCE_NESTING = 100
 #: None: the --max-states limit of limits.py (tests may set a number)
 MAX_STATES: int | None = None
 
@@ -129,6 +131,7 @@ class Elaborator(ModelBackend):
         self.problems: dict[str, SynthesisProblem] = {}
         self.unrealizable: set[str] = set()
         self.building: list[str] = []
+        self._instantiating: list[str] = []  # process instances being built (E0307)
         self._collect(diags)
 
     # ------------------------------------------------------------------ tables
@@ -430,11 +433,24 @@ class Elaborator(ModelBackend):
             diags.extend(d for d in ds if d not in diags)
             return lts
         local: list[Diagnostic] = []
+        stack = self._instantiating
+        if key in stack or len(stack) >= MAX_INSTANCE_NESTING:
+            # `P(N=1) = (a -> P(N+1))`: each instance splices in the next one, forever
+            chain = " -> ".join([*stack[:3], "...", *stack[-2:], key] if len(stack) > 6
+                                else [*stack, key])
+            why = ("includes itself" if key in stack else
+                   f"needs more than {MAX_INSTANCE_NESTING} nested process instances "
+                   "(parameters that grow without bound?)")
+            raise EvalError(error("E0307", f"process instance {stack[0]} {why}: {chain}",
+                                  span))
+        stack.append(key)
         try:
             lts = self._build(name, args, span, local)
         except EvalError as e:
             local.append(e.diag)
             lts = None
+        finally:
+            stack.pop()
         self.cache[key] = (lts, local)
         diags.extend(local)
         return lts
