@@ -94,7 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv is None and args.command in LIMITED_COMMANDS:
         # the real command line (not an in-process caller such as a test): enforce the
         # memory and time limits even inside a long BDD operation
-        limits.start_watchdog(exit_code=EXIT_FAIL)
+        limits.start_watchdog(exit_code=EXIT_FAIL, label=f"iterc {args.command}")
     try:
         return _run(args)
     finally:

@@ -289,6 +289,54 @@ def rss_mb() -> float:
 
 
 _watchdog_stop: threading.Event | None = None
+_stage = ["", 0]  # what the command is doing, and a count (states), for the progress line
+PROGRESS_AFTER_S = 2.0
+
+
+def progress(stage: str | None = None, count: int | None = None) -> None:
+    """Tell the progress line what is happening (cheap: two assignments; safe anywhere)."""
+    if stage is not None:
+        _stage[0] = stage
+    if count is not None:
+        _stage[1] = count
+
+
+class _ProgressLine:
+    """A status line on stderr (a TTY only) once a command runs longer than 2 s: tqdm's
+    spinner-less bar with the stage, the states explored, elapsed time and memory."""
+
+    def __init__(self, label: str) -> None:
+        self.label = label
+        self.bar = None
+        self.enabled = _stderr_is_tty()
+
+    def tick(self, mem: float) -> None:
+        if not self.enabled or elapsed() < PROGRESS_AFTER_S:
+            return
+        if self.bar is None:
+            try:
+                from tqdm import tqdm
+            except ImportError:  # pragma: no cover - tqdm is a dependency
+                self.enabled = False
+                return
+            self.bar = tqdm(total=None, file=sys.stderr, leave=False, dynamic_ncols=True,
+                            bar_format="{desc} {postfix}")
+        stage, count = _stage
+        self.bar.set_description_str(f"{self.label}: {stage or 'working'}", refresh=False)
+        states = f"{count:,} states, " if count else ""
+        self.bar.set_postfix_str(f"[{elapsed():.0f} s, {states}{mem:,.0f} MB]", refresh=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _stderr_is_tty() -> bool:
+    try:
+        return sys.stderr.isatty() and os.environ.get("TERM") != "dumb"
+    except (AttributeError, ValueError):
+        return False
 
 
 def watchdog_breach() -> tuple[str, str] | None:
@@ -303,19 +351,30 @@ def watchdog_breach() -> tuple[str, str] | None:
     return None
 
 
-def start_watchdog(interval: float = 0.25, *, exit_code: int = 1) -> None:
+def start_watchdog(interval: float = 0.25, *, exit_code: int = 1,
+                   label: str = "iterc") -> None:
     """Check memory and time every ``interval`` s in a daemon thread; on a breach print
     ``iterc: error[CODE]: message`` and end the process at once with ``exit_code`` (outputs
-    are written atomically, so nothing half-written is left)."""
+    are written atomically, so nothing half-written is left).  On a TTY it also shows a
+    progress line (:func:`progress`) once the command has run for 2 s."""
     global _watchdog_stop
     stop_watchdog()
     stop = threading.Event()
     _watchdog_stop = stop
+    line = _ProgressLine(label)
+    _stage[:] = ["", 0]
 
     def loop() -> None:
         while not stop.wait(interval):
             breach = watchdog_breach()
+            if breach is None:
+                try:
+                    line.tick(rss_mb())
+                except Exception:  # noqa: BLE001 - a display problem must not stop the work
+                    line.enabled = False
+                continue
             if breach is not None:
+                line.close()
                 try:
                     sys.stdout.flush()
                 except (OSError, ValueError):
@@ -323,7 +382,14 @@ def start_watchdog(interval: float = 0.25, *, exit_code: int = 1) -> None:
                 os.write(2, f"iterc: error[{breach[0]}]: {breach[1]}\n".encode())
                 os._exit(exit_code)
 
-    threading.Thread(target=loop, name="iterplan-limits-watchdog", daemon=True).start()
+        line.close()
+
+    thread = threading.Thread(target=loop, name="iterplan-limits-watchdog", daemon=True)
+    _threads[:] = [thread]
+    thread.start()
+
+
+_threads: list[threading.Thread] = []
 
 
 def stop_watchdog() -> None:
@@ -331,3 +397,6 @@ def stop_watchdog() -> None:
     if _watchdog_stop is not None:
         _watchdog_stop.set()
         _watchdog_stop = None
+        for t in _threads:
+            t.join(timeout=1.0)  # lets the progress line clear itself
+        _threads.clear()

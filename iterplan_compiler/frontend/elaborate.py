@@ -387,6 +387,7 @@ class Elaborator(ModelBackend):
         """See :meth:`Model.build_lts`."""
         from iterplan_compiler import limits
 
+        limits.progress(f"building {name}", 0)
         try:
             lts, diags = self._build_top(name)
         except RecursionError:
@@ -985,6 +986,9 @@ class Elaborator(ModelBackend):
             diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
                                "available in this build", d.span))
             return None
+        from iterplan_compiler import limits
+
+        limits.progress(f"synthesising {d.name}", 0)
         try:
             result = synthesize(problem)
         except _synthesis_errors() as e:  # synthesize reports these itself; a bug propagates

@@ -237,7 +237,8 @@ def _explore(
                 k = len(order)
                 if max_states is not None and k >= max_states:
                     raise StateExplosion(name, max_states)
-                if not k & 0x3FFF:  # every 16,384 new states: the wall-time limit
+                if not k & 0x3FFF:  # every 16,384 new states: progress, the time limit
+                    limits.progress(f"composing {name}", k)
                     limits.check_deadline()
                 index[tgt] = k
                 order.append(tgt)

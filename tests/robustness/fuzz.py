@@ -10,6 +10,9 @@ for specs, value/key/structure edits for maps).  An input *fails* the contract w
   ``MapError``;
 * it runs longer than ``--timeout`` seconds (a resource limit that did not fire).
 
+Specs run with ``--time-limit 5 --max-states 20000`` (so a mutation that asks for a huge
+game ends in a limit diagnostic, which is a pass, instead of minutes of synthesis).
+
 Inputs run in worker processes (one per core) so a hang is killed and counted, not waited
 for.  Failing inputs are saved to ``--save DIR`` to become regression tests.
 
@@ -174,7 +177,8 @@ def run_spec(name: str, text: str, workdir: str) -> str | None:
     out, err = io.StringIO(), io.StringIO()
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            rc = cli.main(["check", "--build", "--quiet", "--time-limit", "20", path])
+            rc = cli.main(["check", "--build", "--quiet", "--time-limit", "5",
+                           "--max-states", "20000", path])
     except SystemExit as e:  # argparse
         rc = e.code if isinstance(e.code, int) else 2
     except BaseException as e:  # noqa: BLE001 - exactly what the fuzzer looks for
@@ -311,7 +315,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--count", type=int, default=None, help="number of inputs")
     ap.add_argument("--seconds", type=float, default=None, help="time budget")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--timeout", type=float, default=30.0, help="seconds per input")
+    ap.add_argument("--timeout", type=float, default=20.0, help="seconds per input")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--save", type=Path, default=None, help="save failing inputs here")
     ap.add_argument("--quiet", action="store_true")
