@@ -31,8 +31,8 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["OutputError", "atomic_write_text", "atomic_write_bytes", "refuse_overwrite_input",
-           "append_line", "check_writable_dir"]
+__all__ = ["OutputError", "OutputFolder", "atomic_write_text", "atomic_write_bytes",
+           "refuse_overwrite_input", "append_line", "complete_lines", "check_writable_dir"]
 
 KILL_ENV = "ITERPLAN_TEST_KILL_AT"
 
@@ -195,3 +195,72 @@ def check_writable_dir(folder: str | os.PathLike[str]) -> None:
         os.unlink(tmp)
     except OSError as e:
         raise OutputError(f"cannot write in the output folder {p}: {e.strerror or e}") from None
+
+
+PARTIAL_MARKER = "RUN-INCOMPLETE.txt"
+
+
+class OutputFolder:
+    """The outputs of one run, published together: files are written into a staging folder
+    beside the target (``.NAME.staging-PID``) and the whole folder replaces ``NAME`` only when
+    the run ends normally.  A run that fails (an exception in the ``with`` block) or is killed
+    never touches the previous run's ``NAME``: its files end in ``NAME.partial/`` with a
+    ``RUN-INCOMPLETE.txt`` marker saying why (a killed run leaves the staging folder, marker
+    included).  The target's parent folder is checked writable on entry -- before the run,
+    not after it::
+
+        with OutputFolder(args.out) as out:
+            out.write_text("events.log", log)
+            out.write_bytes("track.png", png)
+    """
+
+    def __init__(self, folder: str | os.PathLike[str]) -> None:
+        self.final = Path(folder)
+        parent = self.final.parent if str(self.final.parent) else Path(".")
+        self.parent = parent
+        self.stage = parent / f".{self.final.name}.staging-{os.getpid()}"
+
+    def __enter__(self) -> OutputFolder:
+        check_writable_dir(self.parent)
+        if self.final.exists() and not self.final.is_dir():
+            raise OutputError(f"the output path {self.final} exists and is not a folder")
+        import shutil
+
+        shutil.rmtree(self.stage, ignore_errors=True)
+        self.stage.mkdir()
+        atomic_write_text(self.stage / PARTIAL_MARKER,
+                          "this run did not finish (killed or still running); its outputs "
+                          "are incomplete\n")
+        return self
+
+    def path(self, name: str) -> Path:
+        """Where to write output ``name`` during the run (inside the staging folder)."""
+        return self.stage / name
+
+    def write_text(self, name: str, text: str) -> Path:
+        atomic_write_text(self.stage / name, text)
+        return self.final / name
+
+    def write_bytes(self, name: str, data: bytes) -> Path:
+        atomic_write_bytes(self.stage / name, data)
+        return self.final / name
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        import shutil
+
+        if exc_type is None:
+            os.unlink(self.stage / PARTIAL_MARKER)
+            old = self.parent / f".{self.final.name}.previous-{os.getpid()}"
+            if self.final.exists():
+                os.replace(self.final, old)  # a kill right here: NAME is in .NAME.previous-*
+                _kill_point("between-folders")
+            os.replace(self.stage, self.final)
+            _fsync_dir(self.parent)
+            shutil.rmtree(old, ignore_errors=True)
+            return
+        partial = self.parent / f"{self.final.name}.partial"
+        with contextlib.suppress(OSError):
+            atomic_write_text(self.stage / PARTIAL_MARKER,
+                              f"this run failed: {exc_type.__name__}: {exc}\n")
+            shutil.rmtree(partial, ignore_errors=True)
+            os.replace(self.stage, partial)

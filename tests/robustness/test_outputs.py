@@ -191,3 +191,58 @@ def test_experiment_killed_mid_sweep_resumes_from_its_appended_rows(tmp_path):
     rows = list(csv.DictReader((out / "fig3c.csv").open()))
     assert len(rows) >= 2 and all(not row["error"] for row in rows)
     assert len({(row["count"], row["seed"]) for row in rows}) == len(rows)
+
+
+# ------------------------------------------------------------------ a run's output folder
+
+
+def test_output_folder_publishes_all_files_together(tmp_path):
+    target = tmp_path / "run"
+    target.mkdir()
+    (target / "summary.json").write_text('{"old": true}')
+    with outputs.OutputFolder(target) as out:
+        out.write_text("track.geojson", '{"type": "FeatureCollection", "features": []}')
+        out.write_text("summary.json", '{"new": true}')
+        assert (target / "summary.json").read_text() == '{"old": true}'  # not yet
+    assert sorted(p.name for p in target.iterdir()) == ["summary.json", "track.geojson"]
+    assert (target / "summary.json").read_text() == '{"new": true}'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+def test_output_folder_of_a_failed_run_is_marked_partial(tmp_path):
+    target = tmp_path / "run"
+    target.mkdir()
+    (target / "summary.json").write_text("old")
+    with pytest.raises(RuntimeError), outputs.OutputFolder(target) as out:
+        out.write_text("track.csv", "t,x\n")
+        raise RuntimeError("the vehicle link dropped")
+    assert (target / "summary.json").read_text() == "old"  # the previous run is intact
+    partial = tmp_path / "run.partial"
+    assert (partial / "track.csv").read_text() == "t,x\n"
+    assert "vehicle link dropped" in (partial / outputs.PARTIAL_MARKER).read_text()
+
+
+@pytest.mark.parametrize("point", ["after-replace:2", "between-folders"])
+def test_kill_during_a_run_never_mixes_old_and_new_outputs(point, tmp_path):
+    target = tmp_path / "run"
+    target.mkdir()
+    (target / "summary.json").write_text("old summary")
+    (target / "track.csv").write_text("old track")
+    code = ("from iterplan_compiler import outputs\n"
+            f"with outputs.OutputFolder({str(target)!r}) as out:\n"
+            "    out.write_text('track.csv', 'new track')\n"
+            "    out.write_text('summary.json', 'new summary')\n")
+    r = _py(code, point, tmp_path)
+    assert r.returncode == -9, r.stderr
+    if target.exists():  # the old run, whole
+        assert {p.name: p.read_text() for p in target.iterdir()} == \
+            {"summary.json": "old summary", "track.csv": "old track"}
+    else:  # killed between the two renames: the old run is kept aside, whole
+        (old,) = tmp_path.glob(".run.previous-*")
+        assert (old / "summary.json").read_text() == "old summary"
+    (staged,) = tmp_path.glob(".run.staging-*")
+    if point == "between-folders":  # the new run was complete, only not yet published
+        assert {p.name: p.read_text() for p in staged.iterdir()} == \
+            {"summary.json": "new summary", "track.csv": "new track"}
+    else:  # still running: marked as such
+        assert (staged / outputs.PARTIAL_MARKER).exists()
