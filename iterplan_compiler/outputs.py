@@ -32,6 +32,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 __all__ = ["OutputError", "OutputFolder", "atomic_write_text", "atomic_write_bytes",
+           "atomic_write_json",
            "refuse_overwrite_input", "append_line", "complete_lines", "check_writable_dir"]
 
 KILL_ENV = "ITERPLAN_TEST_KILL_AT"
@@ -118,6 +119,18 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
 def atomic_write_text(path: str | os.PathLike[str], text: str, encoding: str = "utf-8") -> None:
     """:func:`atomic_write_bytes` of ``text`` encoded (newlines written as given)."""
     atomic_write_bytes(path, text.encode(encoding))
+
+
+def atomic_write_json(path: str | os.PathLike[str], obj: object, *, indent: int | None = 2
+                      ) -> None:
+    """Write ``obj`` as *valid* JSON (RFC 8259), atomically: NaN and Infinity, which
+    ``json.dumps`` would write as the non-JSON tokens ``NaN``/``Infinity``, raise
+    :class:`ValueError` before anything is written -- so no output file is ever invalid
+    JSON (or GeoJSON)."""
+    import json
+
+    text = json.dumps(obj, indent=indent, allow_nan=False)
+    atomic_write_text(path, text + "\n")
 
 
 def append_line(path: str | os.PathLike[str], line: str, encoding: str = "utf-8") -> None:

@@ -246,3 +246,16 @@ def test_kill_during_a_run_never_mixes_old_and_new_outputs(point, tmp_path):
             {"summary.json": "new summary", "track.csv": "new track"}
     else:  # still running: marked as such
         assert (staged / outputs.PARTIAL_MARKER).exists()
+
+
+def test_atomic_write_json_never_writes_invalid_json(tmp_path):
+    import json
+    import math
+
+    p = tmp_path / "track.geojson"
+    p.write_text('{"type": "FeatureCollection", "features": []}')
+    with pytest.raises(ValueError):
+        outputs.atomic_write_json(p, {"type": "Point", "coordinates": [math.nan, 1.0]})
+    json.loads(p.read_text())  # the old, valid file is still there
+    outputs.atomic_write_json(p, {"type": "Point", "coordinates": [149.1, -35.3]})
+    assert json.loads(p.read_text())["coordinates"] == [149.1, -35.3]
