@@ -283,7 +283,8 @@ def check_assert(
         return None, [error(E_UNKNOWN_FLUENT, f"assert {named.name}: {exc}", named.span)]
     except StateLimitExceeded:
         return None, [error(E_TOO_LARGE, f"checking assert {named.name} on {lts.name} exceeds "
-                                         f"{max_states} product states", named.span)]
+                                         f"{max_states:,} product states (raise the limit "
+                                         "with --max-states)", named.span)]
     except RecursionError:  # see safety_lts: a formula nested ~1000 deep is too large an input
         return None, [error(E_TOO_LARGE, f"assert {named.name}: the formula is nested too "
                                          "deeply to check", named.span)]

@@ -124,6 +124,7 @@ def safety_lts(
     too_large = limits.formula_too_large(named.formula)
     if too_large is not None:
         return None, [error("E0603", f"{kind} {named.name}: {too_large}", named.span)]
+    max_states = min(max_states, limits.current().max_states)
     try:
         dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
@@ -131,7 +132,8 @@ def safety_lts(
         return None, [error(E_UNKNOWN_FLUENT, f"{kind} {named.name}: {exc}", named.span)]
     except StateLimitExceeded:
         return None, [error(E_TOO_LARGE, f"{kind} {named.name}: the formula's automaton exceeds "
-                                         f"{max_states} states", named.span)]
+                                         f"{max_states:,} states (raise the limit with "
+                                         "--max-states)", named.span)]
     except RecursionError:
         # The NNF/tableau code recurses over the formula tree; a formula nested ~1000 deep
         # (generated specs) is a too-large input, not a compiler crash.

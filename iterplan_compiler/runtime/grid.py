@@ -434,8 +434,8 @@ def parse_sensor_rules(data: dict, static: Iterable[str] = ()) -> tuple[
 # rejected, GeoJSON geometries must be 2-D); a violation is a MapError naming the JSON path:
 # ``map.json: $.sensors.fire[2]: expected a cell name, [col, row] or [lat, lon]``.
 
-#: largest grid (cols x rows) a map may ask for: 16 M cells, ~130 MB of cell ids
-MAX_MAP_CELLS = 16_000_000
+#: largest grid (cols x rows) a map may ask for: 4 M cells (100 x 100 km at 50 m), 32 MB of ids
+MAX_MAP_CELLS = 4_000_000
 #: the local projection divides by cos(latitude): no grid anchored nearer the poles
 MAX_ORIGIN_LAT = 85.0
 

@@ -249,7 +249,10 @@ class SymbolicGame:
         """Forward-reachable states from ``init`` (also cached as ``self.reach``)."""
         R = self.init
         frontier = self.init
+        from iterplan_compiler import limits
+
         while frontier != self.bdd.false:
+            limits.check_deadline()  # --time-limit between image steps
             img = self.post(frontier)
             frontier = img & ~R
             R |= frontier

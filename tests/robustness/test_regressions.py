@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import random
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -123,3 +124,23 @@ def test_fuzz_map_loader(seed, r, tmp_path):
         load_map(p)
     except MapError as exc:
         assert str(exc).startswith(str(p)) or "cannot read" in str(exc), str(exc)
+
+
+CORPUS = Path(__file__).resolve().parents[3] / "shared" / "conformance" / "mtsa"
+
+
+@pytest.mark.skipif(not (CORPUS / "FSP" / "SLBD-V5.lts").is_file(),
+                    reason="the MTSA conformance corpus (../shared) is not present")
+def test_fuzz_found_slow_safety_automaton_honours_the_time_limit(tmp_path, capsys):
+    """Found by tests/robustness/fuzz.py (seed 14, input 21299): SLBD-V5 with N = 22 cars makes
+    an ltl_property over 44 fluents, whose automaton is explored for minutes; --time-limit
+    must stop it (checked every 64 automaton states) with E0404."""
+    text = (CORPUS / "FSP" / "SLBD-V5.lts").read_text()
+    assert "const N = 2/" in text
+    spec = tmp_path / "slbd.lts"
+    spec.write_text(text.replace("const N = 2/", "const N = 22/", 1))
+    t0 = time.monotonic()
+    rc = cli.main(["check", "--build", "--quiet", "--time-limit", "3", str(spec)])
+    err = capsys.readouterr().err
+    assert rc == 1 and "error[E0404]" in err and "--time-limit" in err, err[-2000:]
+    assert time.monotonic() - t0 < 30  # 3 s plus the work between two checks, under load
