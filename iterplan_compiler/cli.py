@@ -22,7 +22,7 @@ import sys
 import traceback
 from collections.abc import Sequence
 
-from iterplan_compiler import __version__
+from iterplan_compiler import __version__, limits
 
 # name -> (module, one-line help).  The help is duplicated here so `iterc --help` need not
 # import every command module.
@@ -39,6 +39,9 @@ COMMANDS: dict[str, str] = {
     "conformance": "run the MTSA conformance corpus and print a report",
     "experiment": "reproduce the paper's Fig. 3 experiments",
 }
+
+#: commands that compile specs and so take the resource-limit flags (limits.py)
+LIMITED_COMMANDS = frozenset({"check", "lts", "verify", "synth", "compile", "dot"})
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -67,6 +70,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=help_text)
         if only == name:
             _load(name).add_arguments(p)
+            if name in LIMITED_COMMANDS:
+                limits.add_arguments(p)
     return parser
 
 
@@ -84,6 +89,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_USAGE
+    previous = limits.set_limits()  # restored on return: in-process callers (tests) share it
+    limits.apply(args)
+    if argv is None and args.command in LIMITED_COMMANDS:
+        # the real command line (not an in-process caller such as a test): enforce the
+        # memory and time limits even inside a long BDD operation
+        limits.start_watchdog(exit_code=EXIT_FAIL, label=f"iterc {args.command}")
+    try:
+        return _run(args)
+    finally:
+        limits.stop_watchdog()
+        limits.set_limits(previous)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(_load(args.command).run(args))
     except KeyboardInterrupt:
@@ -91,11 +110,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return EXIT_OK
-    except RecursionError:
-        # Last line of defence: every stage turns deep nesting into a diagnostic, but a new
-        # recursive path must still not show the user a traceback for their input.
-        print("iterc: error: the input is nested too deeply to process", file=sys.stderr)
+    except limits.LimitReached as e:
+        # a resource limit reached outside a stage that turns it into a located diagnostic
+        print(f"iterc: error[{e.code}]: {e.message}", file=sys.stderr)
         return EXIT_FAIL
+    except RecursionError:
+        # The front-end turns deep nesting of the *input* into diagnostic E0005 where it
+        # happens (frontend.load, build_lts, FLTL); a RecursionError that reaches this point
+        # comes from a recursive path of ours that the input did not ask for: a bug.
+        print("iterc: internal error (this is a bug in iterc, please report it): unbounded "
+              "recursion (RecursionError) outside the front-end's nesting checks",
+              file=sys.stderr)
+        traceback.print_exc(limit=-8)
+        return EXIT_INTERNAL
     except Exception:  # a compiler bug: never show a bare traceback as if it were the user's fault
         print("iterc: internal error (this is a bug in iterc, please report it):",
               file=sys.stderr)

@@ -119,10 +119,12 @@ def render(dot_text: str, path: str | Path) -> None:
     SVG, PNG and PDF need Graphviz's ``dot`` binary; raises :class:`GraphvizError` if it is
     absent or fails, and :class:`ValueError` for an unknown suffix.
     """
+    from iterplan_compiler.outputs import atomic_write_bytes, atomic_write_text
+
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".dot", ".gv"):
-        path.write_text(dot_text, encoding="utf-8")
+        atomic_write_text(path, dot_text)
         return
     fmt = RENDER_FORMATS.get(suffix)
     if fmt is None:
@@ -133,8 +135,8 @@ def render(dot_text: str, path: str | Path) -> None:
             f"rendering {path.name} needs Graphviz's `dot` program, which is not installed "
             "(install graphviz, or write .dot instead)"
         )
-    proc = subprocess.run(
-        [exe, f"-T{fmt}", "-o", str(path)],
+    proc = subprocess.run(  # to stdout, then written atomically (a kill never leaves half)
+        [exe, f"-T{fmt}"],
         input=dot_text.encode("utf-8"),
         capture_output=True,
         check=False,
@@ -142,3 +144,4 @@ def render(dot_text: str, path: str | Path) -> None:
     if proc.returncode != 0:
         msg = proc.stderr.decode("utf-8", "replace").strip()
         raise GraphvizError(f"dot failed on {path.name}: {msg}")
+    atomic_write_bytes(path, proc.stdout)

@@ -39,10 +39,16 @@ _SUFFIX_KIND = {".py": "py", ".dot": "dot", ".gv": "dot", ".lts": "fsp", ".fsp":
 def run(args: argparse.Namespace) -> int:
     """Compile; print diagnostics to stderr; return 0, 1 (errors/unrealizable) or 2 (usage)."""
     from iterplan_compiler.backends.driver import compile_spec
+    from iterplan_compiler.outputs import OutputError, atomic_write_text, refuse_overwrite_input
 
     kind = args.emit
     if kind is None:
         kind = _SUFFIX_KIND.get(Path(args.output).suffix.lower(), "py") if args.output else "py"
+    try:
+        refuse_overwrite_input(args.output, [args.spec])
+    except OutputError as exc:
+        print(f"iterc compile: {exc.message}", file=sys.stderr)
+        return 1
     if args.output and not Path(args.output).parent.is_dir():
         # Checked before synthesis, which may take a while, only to fail at the very end.
         print(f"iterc compile: cannot write {args.output}: no such directory "
@@ -55,7 +61,12 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if args.output:
         try:
-            Path(args.output).write_text(out.text, encoding="utf-8")
+            # an included file is known only now
+            refuse_overwrite_input(args.output, list(out.sources))
+            atomic_write_text(args.output, out.text)
+        except OutputError as exc:
+            print(f"iterc compile: {exc.message}", file=sys.stderr)
+            return 1
         except OSError as exc:
             print(f"iterc compile: cannot write {args.output}: {exc.strerror}", file=sys.stderr)
             return 1

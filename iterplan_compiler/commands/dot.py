@@ -42,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.backends.driver import build_named
     from iterplan_compiler.backends.graphviz import RENDER_FORMATS, GraphvizError, to_dot
     from iterplan_compiler.backends.graphviz import render as draw
+    from iterplan_compiler.outputs import OutputError, refuse_overwrite_input
 
     if args.output:
         suffix = Path(args.output).suffix.lower()
@@ -49,6 +50,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"iterc dot: cannot write {args.output}: use .dot, .gv, .svg, .png or .pdf",
                   file=sys.stderr)
             return 2
+        try:
+            refuse_overwrite_input(args.output, [args.spec])
+        except OutputError as exc:
+            print(f"iterc dot: {exc.message}", file=sys.stderr)
+            return 1
         if not Path(args.output).parent.is_dir():
             print(f"iterc dot: cannot write {args.output}: no such directory "
                   f"'{Path(args.output).parent}'", file=sys.stderr)
@@ -72,7 +78,11 @@ def run(args: argparse.Namespace) -> int:
               f"{lts.num_transitions} transitions; Graphviz may take a long time to lay it out "
               "(write .dot instead, or draw a smaller process)", file=sys.stderr)
     try:
+        refuse_overwrite_input(args.output, list(sources))  # included files are known now
         draw(text, args.output)
+    except OutputError as exc:
+        print(f"iterc dot: {exc.message}", file=sys.stderr)
+        return 1
     except GraphvizError as exc:
         print(f"iterc dot: {exc}", file=sys.stderr)
         return 1

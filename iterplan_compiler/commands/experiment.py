@@ -8,16 +8,21 @@
     iterc experiment synthesis-table --max-n 6
 
 Writes ``<out>/<exp>.csv`` (one row per simulated mission), ``<out>/<exp>_summary.csv``
-(mean ± 3 SEM per point) and ``<out>/<exp>.png``; prints the summary.
+(mean ± 3 SEM per point) and ``<out>/<exp>.png``; prints the summary.  While a sweep runs,
+each finished mission is appended to ``<out>/<exp>.partial.csv``; a sweep that was killed
+resumes from it (``--fresh`` starts over).  Every file is written atomically (outputs.py).
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import io
 import os
 import sys
 from pathlib import Path
+
+from iterplan_compiler import outputs
 
 HELP = "reproduce the paper's Fig. 3 experiments"
 CHOICES = ("fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table", "all")
@@ -48,6 +53,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fast-skip", action="store_true",
                         help="fig3b: the runtime's fast skip of the controller's skip cycles "
                              "(same controller behaviour, less iteration overhead)")
+    parser.add_argument("--fresh", action="store_true",
+                        help="ignore the runs saved by an interrupted sweep (<exp>.partial.csv)"
+                        " and start over")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -104,29 +112,41 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
     runner = missions.Runner(str(out / "controllers"), fast_skip=args.fast_skip)
-    prog = harness.Progress(len(cases), name, enabled=not args.no_progress)
+    # Each finished run is appended to <name>.partial.csv at once (one fsync-ed line), so a
+    # sweep killed after hours resumes where it stopped: runs already in the file are kept.
     partial = out / f"{name}.partial.csv"
     fields = harness.CASE_FIELDS + harness.RESULT_FIELDS
-    with partial.open("w", newline="") as fh:
-        # Rows in completion order while the sweep runs; replaced by the ordered CSV at the end.
-        writer = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore",
-                                lineterminator="\n")
-        writer.writeheader()
+    done_rows = [] if args.fresh else _resumable_rows(partial, fields)
+    ident = {tuple(str(r[f]) for f in harness.CASE_FIELDS): r for r in done_rows
+             if not r.get("error")}  # failed runs are run again
+    todo = [c for c in cases
+            if tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS) not in ident]
+    if done_rows:
+        kept = len(cases) - len(todo)
+        print(f"iterc experiment {name}: resuming: {kept} of {len(cases)} runs already done "
+              f"in {partial} (--fresh to start over)", file=sys.stderr)
+    else:
+        outputs.atomic_write_text(partial, _csv_line(fields, {f: f for f in fields}))
+    prog = harness.Progress(len(todo), name, enabled=not args.no_progress)
 
-        def save(row: dict) -> None:
-            writer.writerow(row)
-            fh.flush()
+    def save(row: dict) -> None:
+        outputs.append_line(partial, _csv_line(fields, row))
 
-        try:
-            rows = harness.run_cases(cases, runner, jobs=jobs, scheduler=args.scheduler,
+    try:
+        new_rows = harness.run_cases(todo, runner, jobs=jobs, scheduler=args.scheduler,
                                      progress=prog, on_row=save)
-        except harness.ExperimentError as exc:
-            print(f"iterc experiment: {exc}", file=sys.stderr)
-            return 2
-    partial.unlink()
-    harness.write_csv(rows, out / f"{name}.csv")
+    except harness.ExperimentError as exc:
+        print(f"iterc experiment: {exc}", file=sys.stderr)
+        return 2
+    by_case = dict(ident)
+    for r in new_rows:
+        by_case[tuple(str(r[f]) for f in harness.CASE_FIELDS)] = r
+    rows = [by_case[k] for k in (tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS)
+                                 for c in cases) if k in by_case]
+    outputs.atomic_write_text(out / f"{name}.csv", harness.write_csv(rows))
+    partial.unlink()  # only once the complete CSV is in place
     points = harness.aggregate(rows)
-    harness.write_summary_csv(points, out / f"{name}_summary.csv")
+    outputs.atomic_write_text(out / f"{name}_summary.csv", harness.write_summary_csv(points))
     png = plots.plot(name, points, out / f"{name}.png")
     print(_summary_text(name, points))
     print(f"wrote {out / (name + '.csv')}, {out / (name + '_summary.csv')}, {png}")
@@ -136,6 +156,26 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _csv_line(fields: list[str], row: dict) -> str:
+    buf = io.StringIO()
+    csv.DictWriter(buf, fieldnames=fields, extrasaction="ignore",
+                   lineterminator="\n").writerow({k: row.get(k, "") for k in fields})
+    return buf.getvalue()
+
+
+def _resumable_rows(partial: Path, fields: list[str]) -> list[dict]:
+    """Rows of a previous, interrupted run of the same sweep (none if the header differs)."""
+    lines = outputs.complete_lines(partial)
+    if not lines:
+        return []
+    rows = list(csv.DictReader(io.StringIO("\n".join(lines) + "\n")))
+    if not rows and lines[0].split(",") != fields:
+        return []
+    if rows and list(rows[0].keys()) != fields:
+        return []
+    return rows
 
 
 def _trajectories(args, out: Path) -> int:
@@ -184,7 +224,7 @@ def _synthesis_table(args, out: Path) -> int:
     ns = list(range(1, max_n + 1))
     prog = harness.Progress(4 + len(ns) + sum(n >= 2 for n in ns), "synthesis-table", enabled=not args.no_progress)
     rows = table(ns, budget_s=budget, progress=prog)
-    (out / "synthesis_table.csv").write_text(rows_csv(rows))
+    outputs.atomic_write_text(out / "synthesis_table.csv", rows_csv(rows))
     print(format_table(rows))
     print(f"wrote {out / 'synthesis_table.csv'}")
     errors = [r for r in rows if r.status == "error"]

@@ -34,8 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--unfair", action="store_true",
                         help="check every infinite run, not only the fair ones (default: "
                              "fair choice, as LTSA/MTSA)")
-    parser.add_argument("--max-states", type=int, default=2_000_000, metavar="N",
-                        help="give up when a product grows beyond N states (default 2000000)")
+    # --max-states (composition and the model-checking product) is one of the shared
+    # resource-limit flags of limits.py, added by cli.py
 
 
 def _sources(args: argparse.Namespace, model) -> dict[str, str]:
@@ -74,7 +74,7 @@ def _is_state_formula(formula) -> bool:
 
 def run(args: argparse.Namespace) -> int:
     """Check; diagnostics to stderr, verdicts and traces to stdout."""
-    from iterplan_compiler import frontend
+    from iterplan_compiler import frontend, limits
     from iterplan_compiler.fltl.check import check_assert
 
     # A missing or unreadable SPEC is an input error the front-end reports (E0800, exit 1),
@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     failed = False
     for nf in named:
         result, cdiags = check_assert(lts, nf, model.fluents, fair=not args.unfair,
-                                      max_states=args.max_states)
+                                      max_states=limits.current().max_states)
         if cdiags:
             print(render(cdiags, _sources(args, model)), file=sys.stderr)
         if result is None:

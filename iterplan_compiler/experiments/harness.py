@@ -26,6 +26,7 @@ from typing import TextIO
 
 from iterplan_compiler.experiments.stats import overhead, summarize
 from iterplan_compiler.experiments.sweeps import Case
+from iterplan_compiler.outputs import atomic_write_text
 
 Runner = Callable[[Case], dict]
 
@@ -146,7 +147,7 @@ def write_csv(rows: Sequence[dict], path: Path | None = None) -> str:
         w.writerow({k: _fmt(r.get(k, "")) for k in fields})
     text = buf.getvalue()
     if path is not None:
-        path.write_text(text)
+        atomic_write_text(path, text)
     return text
 
 
@@ -200,5 +201,5 @@ def write_summary_csv(points: Sequence[Point], path: Path | None = None) -> str:
         w.writerow({k: _fmt(v) for k, v in dataclasses.asdict(p).items()})
     text = buf.getvalue()
     if path is not None:
-        path.write_text(text)
+        atomic_write_text(path, text)
     return text

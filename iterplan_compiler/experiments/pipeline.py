@@ -103,5 +103,7 @@ def compile_example(name: str, out_dir: Path, *, text: str | None = None,
     if reuse and target.exists() and digest in target.read_text():
         return target, {"cached": True}
     source, stats = compile_to_source(spec, ex.composite, text=src_text)
-    target.write_text(source)
+    from iterplan_compiler.outputs import atomic_write_text
+
+    atomic_write_text(target, source)
     return target, stats

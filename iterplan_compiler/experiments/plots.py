@@ -6,6 +6,7 @@ constant speed.  Uses the non-interactive Agg backend, so it works without a dis
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -69,6 +70,10 @@ def plot(experiment: str, points: Sequence[Point], path: Path) -> Path:
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     # No timestamp in PNG metadata: re-running gives the same file for the same data.
-    fig.savefig(path, metadata={"Software": None})
+    from iterplan_compiler.outputs import atomic_write_bytes
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", metadata={"Software": None})
+    atomic_write_bytes(path, buf.getvalue())  # a kill never leaves half a picture
     plt.close(fig)
     return path

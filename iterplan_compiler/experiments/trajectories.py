@@ -8,6 +8,7 @@ stretch as the universe grows.
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 from iterplan_compiler.experiments.sweeps import PATROL_CELLS, Case
@@ -60,6 +61,10 @@ def plot_tracks(runs, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, metadata={"Software": None})
+    from iterplan_compiler.outputs import atomic_write_bytes
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", metadata={"Software": None})
+    atomic_write_bytes(path, buf.getvalue())  # a kill never leaves half a picture
     plt.close(fig)
     return path

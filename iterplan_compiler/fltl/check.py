@@ -29,6 +29,7 @@ from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.fltl.emptiness import (
     Analysis,
@@ -273,13 +274,17 @@ def check_assert(
     max_states: int = DEFAULT_MAX_STATES,
 ) -> tuple[CheckResult | None, list[Diagnostic]]:
     """:func:`model_check` with diagnostics instead of exceptions for bad input."""
+    too_large = limits.formula_too_large(named.formula)
+    if too_large is not None:
+        return None, [error("E0603", f"assert {named.name}: {too_large}", named.span)]
     try:
         return model_check(lts, named.formula, fluents, fair=fair, max_states=max_states), []
     except UnknownFluentError as exc:
         return None, [error(E_UNKNOWN_FLUENT, f"assert {named.name}: {exc}", named.span)]
     except StateLimitExceeded:
         return None, [error(E_TOO_LARGE, f"checking assert {named.name} on {lts.name} exceeds "
-                                         f"{max_states} product states", named.span)]
+                                         f"{max_states:,} product states (raise the limit "
+                                         "with --max-states)", named.span)]
     except RecursionError:  # see safety_lts: a formula nested ~1000 deep is too large an input
         return None, [error(E_TOO_LARGE, f"assert {named.name}: the formula is nested too "
                                          "deeply to check", named.span)]

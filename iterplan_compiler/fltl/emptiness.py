@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import networkx as nx
 
+from iterplan_compiler import limits
+
 Edge = tuple[str, Hashable, int]
 Successors = Callable[[Hashable], Iterable[Edge]]
 
@@ -59,6 +61,9 @@ def analyse(
         adj[v] = es
         if max_nodes is not None and len(adj) > max_nodes:
             raise StateLimitExceeded(max_nodes)
+        if not len(adj) & 0x3F:  # every 64 nodes: progress and --time-limit
+            limits.progress("exploring a formula automaton / product", len(adj))
+            limits.check_deadline()
         for _, w, _ in es:
             if w not in order:
                 order[w] = len(order)

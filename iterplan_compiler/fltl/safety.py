@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
 from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
 from iterplan_compiler.fltl.progression import FormulaAutomaton, State
@@ -120,6 +121,10 @@ def safety_lts(
     """
     kind = "constraint" if constraint else "ltl_property"
     diags: list[Diagnostic] = []
+    too_large = limits.formula_too_large(named.formula)
+    if too_large is not None:
+        return None, [error("E0603", f"{kind} {named.name}: {too_large}", named.span)]
+    max_states = min(max_states, limits.current().max_states)
     try:
         dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
@@ -127,7 +132,8 @@ def safety_lts(
         return None, [error(E_UNKNOWN_FLUENT, f"{kind} {named.name}: {exc}", named.span)]
     except StateLimitExceeded:
         return None, [error(E_TOO_LARGE, f"{kind} {named.name}: the formula's automaton exceeds "
-                                         f"{max_states} states", named.span)]
+                                         f"{max_states:,} states (raise the limit with "
+                                         "--max-states)", named.span)]
     except RecursionError:
         # The NNF/tableau code recurses over the formula tree; a formula nested ~1000 deep
         # (generated specs) is a too-large input, not a compiler crash.

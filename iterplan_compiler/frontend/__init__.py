@@ -28,6 +28,9 @@ def parse_file(path: str, text: str | None = None):
             return None, [error("E0800", f"cannot read {path}: {e.strerror or e}",
                                 Span(path, 0, 0))], {}
     sources = {path: text}
+    from iterplan_compiler import limits
+
+    limits.progress(f"parsing {Path(path).name}", 0)
     try:
         spec, ds = parse_text(text, path)
         diags.extend(ds)

@@ -55,7 +55,26 @@ PLANT_KEYWORDS = frozenset({"plant", "controlled_det"})
 UNSUPPORTED_AT_BUILD: frozenset[str] = frozenset()
 UNSUPPORTED_KEYWORDS = frozenset({"closure", "abstract", "optimistic", "pessimistic",
                                   "component", "rtc", "rtcAnalysis", "probabilistic", "mdp"})
-MAX_STATES = 2_000_000
+#: process instances spliced into one another (``P(N) = (a -> P(N+1))``) at most
+MAX_INSTANCE_NESTING = 100
+#: None: the --max-states limit of limits.py (tests may set a number)
+MAX_STATES: int | None = None
+
+
+def _max_states() -> int:
+    from iterplan_compiler import limits
+
+    return MAX_STATES if MAX_STATES is not None else limits.current().max_states
+
+
+def _synthesis_errors() -> tuple[type[BaseException], ...]:
+    """The exceptions of the synthesis stage that are about the *input* (a diagnostic, exit 1);
+    every other exception is a compiler bug and must reach the CLI's exit 3 handler."""
+    try:
+        encode = importlib.import_module("iterplan_compiler.synthesis.encode")
+    except ImportError:
+        return ()
+    return (encode.SynthesisError, encode.PreconditionFailure)
 
 
 def relabel(lts: LTS, mapping: Mapping[str, list[str]]) -> LTS:
@@ -112,6 +131,7 @@ class Elaborator(ModelBackend):
         self.problems: dict[str, SynthesisProblem] = {}
         self.unrealizable: set[str] = set()
         self.building: list[str] = []
+        self._instantiating: list[str] = []  # process instances being built (E0307)
         self._collect(diags)
 
     # ------------------------------------------------------------------ tables
@@ -365,6 +385,9 @@ class Elaborator(ModelBackend):
     def build_lts(self, name: str, unrealizable: str = "error"
                   ) -> tuple[LTS | None, list[Diagnostic]]:
         """See :meth:`Model.build_lts`."""
+        from iterplan_compiler import limits
+
+        limits.progress(f"building {name}", 0)
         try:
             lts, diags = self._build_top(name)
         except RecursionError:
@@ -372,6 +395,11 @@ class Elaborator(ModelBackend):
 
             self.building.clear()
             return None, [too_deep(self.spec.path)]
+        except limits.LimitReached as e:  # e.g. the winning region of a game: a diagnostic
+            self.building.clear()
+            d = self.composites.get(name) or self.processes.get(name)
+            span = d.span if d is not None else Span(self.spec.path, 0, 0)
+            return None, [error(e.code, f"building {name}: {e.message}", span)]
         if unrealizable == "plant" and lts is None and name in self.unrealizable:
             plant, ds = self.unrealizable_plant(name)
             if plant is not None:
@@ -406,11 +434,24 @@ class Elaborator(ModelBackend):
             diags.extend(d for d in ds if d not in diags)
             return lts
         local: list[Diagnostic] = []
+        stack = self._instantiating
+        if key in stack or len(stack) >= MAX_INSTANCE_NESTING:
+            # `P(N=1) = (a -> P(N+1))`: each instance splices in the next one, forever
+            chain = " -> ".join([*stack[:3], "...", *stack[-2:], key] if len(stack) > 6
+                                else [*stack, key])
+            why = ("includes itself" if key in stack else
+                   f"needs more than {MAX_INSTANCE_NESTING} nested process instances "
+                   "(parameters that grow without bound?)")
+            raise EvalError(error("E0307", f"process instance {stack[0]} {why}: {chain}",
+                                  span))
+        stack.append(key)
         try:
             lts = self._build(name, args, span, local)
         except EvalError as e:
             local.append(e.diag)
             lts = None
+        finally:
+            stack.pop()
         self.cache[key] = (lts, local)
         diags.extend(local)
         return lts
@@ -453,7 +494,7 @@ class Elaborator(ModelBackend):
             from iterplan_compiler.ir.compose import StateExplosion, compose
 
             try:
-                return compose(machines, "DEFAULT", max_states=MAX_STATES)
+                return compose(machines, "DEFAULT", max_states=_max_states())
             except StateExplosion as e:
                 diags.append(error("E0402", f"composing DEFAULT: {e}", span))
                 return None
@@ -516,7 +557,7 @@ class Elaborator(ModelBackend):
             controllable = frozenset(self.sets[named[0]])
             source = f"set {named[0]}"
         res = is_legal(machines[0], machines[1], controllable, context=machines[2:],
-                       max_states=MAX_STATES)
+                       max_states=_max_states())
         pair = f"controller {machines[0].name}, plant {machines[1].name}, controllable = {source}"
         if res.legal:
             return True, f"legal ({pair}; {res.product_states} states)"
@@ -579,7 +620,7 @@ class Elaborator(ModelBackend):
         from iterplan_compiler.ir.compose import StateExplosion, compose
 
         try:
-            return compose(machines, inst, self._priority(d, env), max_states=MAX_STATES)
+            return compose(machines, inst, self._priority(d, env), max_states=_max_states())
         except StateExplosion as e:
             diags.append(error("E0402", f"composing {inst}: {e}", d.span))
             return None
@@ -611,7 +652,8 @@ class Elaborator(ModelBackend):
                                    "(iterplan_compiler.synthesis.encode), which is not "
                                    "available", d.span))
                 return None
-            except Exception as e:  # SynthesisError: an unsupported goal
+            except _synthesis_errors() as e:
+                # an unsupported goal; any other exception is a bug and propagates (exit 3)
                 diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
                 return None
         lts = self._compose(machines, d, env, inst, diags)
@@ -867,7 +909,7 @@ class Elaborator(ModelBackend):
         if all(ops.is_deterministic(m) for m in machines):
             return problem
         try:
-            plant = compose(machines, problem.name, max_states=MAX_STATES)
+            plant = compose(machines, problem.name, max_states=_max_states())
         except StateExplosion as e:
             diags.append(error("E0402", f"composing the plant of {problem.name}: {e}", d.span))
             return None
@@ -893,7 +935,7 @@ class Elaborator(ModelBackend):
             diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
                                "available in this build", d.span))
             return None
-        except Exception as e:  # SynthesisError (e.g. a temporal goal) or a synthesis bug
+        except _synthesis_errors() as e:  # e.g. a temporal goal; a bug propagates (exit 3)
             diags.append(error("E0901", f"compatibility check of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
             return None
@@ -914,7 +956,7 @@ class Elaborator(ModelBackend):
         diags: list[Diagnostic] = []
         try:
             plant = compose([*problem.plant, *problem.safety], f"{name}_#NC#",
-                            max_states=MAX_STATES)
+                            max_states=_max_states())
         except StateExplosion as e:
             return None, [error("E0402", f"composing the plant of {name}: {e}", d.span)]
         env = self.env().with_params(self._params(d.params, (), d.name, d.span))
@@ -944,10 +986,14 @@ class Elaborator(ModelBackend):
             diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
                                "available in this build", d.span))
             return None
+        from iterplan_compiler import limits
+
+        limits.progress(f"synthesising {d.name}", 0)
         try:
             result = synthesize(problem)
-        except Exception as e:  # a synthesis bug must not look like a front-end crash
-            diags.append(error("E0901", f"synthesis of {d.name} failed: {e}", d.span))
+        except _synthesis_errors() as e:  # synthesize reports these itself; a bug propagates
+            diags.append(error("E0901", f"synthesis of {d.name} failed: "
+                               f"{getattr(e, 'message', e)}", d.span))
             return None
         if not result.realizable:
             self.unrealizable.add(inst)

@@ -15,6 +15,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.frontend import syntax as S
 
@@ -161,46 +162,80 @@ def evaluate(e: S.Expr, env: Env, depth: int = 0) -> Value:
                 same = a == b
             return int(same if e.op == "==" else not same)
         x, y = _num(a, e.span), _num(b, e.span)
-        op = e.op
-        if op == "+":
-            return _norm(x + y)
-        if op == "-":
-            return _norm(x - y)
-        if op == "*":
-            return _norm(x * y)
-        if op in ("/", "\\", "%"):
-            if y == 0:
-                raise fail("E0203", "division by zero", e.span)
-            if op == "/":
-                return _norm(Fraction(x) / Fraction(y))
-            if op == "\\":
-                q = abs(Fraction(x)) // abs(Fraction(y))  # truncation toward zero (Java)
-                return int(q if (x >= 0) == (y >= 0) else -q)
-            xi, yi = to_int(x, e.span), to_int(y, e.span)
-            r = abs(xi) % abs(yi)
-            return r if xi >= 0 else -r
-        if op == "**":
-            return _norm(Fraction(x) ** to_int(y, e.span))
-        if op == "<":
-            return int(x < y)
-        if op == "<=":
-            return int(x <= y)
-        if op == ">":
-            return int(x > y)
-        if op == ">=":
-            return int(x >= y)
-        xi, yi = to_int(x, e.span), to_int(y, e.span)
-        if op == "<<":
-            return xi << yi
-        if op == ">>":
-            return xi >> yi
-        if op == "&":
-            return xi & yi
-        if op == "|":
-            return xi | yi
-        if op == "^":
-            return xi ^ yi
+        return _sized(_arith(e.op, x, y, e.span), e.span)
     raise fail("E0202", "unsupported expression", getattr(e, "span", Span("<expr>", 0, 0)))
+
+
+def _sized(v: Value, span: Span) -> Value:
+    """``v``, or E0208 when it has more bits than ``--max-int-bits`` (see limits.py)."""
+    if isinstance(v, int):
+        msg = limits.int_too_large(v)
+    elif isinstance(v, Fraction):
+        msg = limits.int_too_large(v.numerator) or limits.int_too_large(v.denominator)
+    else:
+        return v
+    if msg is not None:
+        raise fail("E0208", msg, span)
+    return v
+
+
+def _arith(op: str, x: int | Fraction, y: int | Fraction, span: Span) -> Value:
+    """A binary arithmetic, comparison or bit operator on two numbers."""
+    if op in ("**", "<<"):
+        yi = to_int(y, span)
+        if op == "<<":
+            msg = limits.power_too_large(2, yi) if yi > 0 else None
+        elif isinstance(x, Fraction):
+            msg = (limits.power_too_large(x.numerator.bit_length() + 1, abs(yi))
+                   or limits.power_too_large(x.denominator.bit_length() + 1, abs(yi)))
+        else:
+            msg = limits.power_too_large(abs(x).bit_length() + (1 if abs(x) > 1 else 0),
+                                         abs(yi))
+        if msg is not None:
+            raise fail("E0208", msg, span)
+    if op == "+":
+        return _norm(x + y)
+    if op == "-":
+        return _norm(x - y)
+    if op == "*":
+        return _norm(x * y)
+    if op in ("/", "\\", "%"):
+        if y == 0:
+            raise fail("E0203", "division by zero", span)
+        if op == "/":
+            return _norm(Fraction(x) / Fraction(y))
+        if op == "\\":
+            q = abs(Fraction(x)) // abs(Fraction(y))  # truncation toward zero (Java)
+            return int(q if (x >= 0) == (y >= 0) else -q)
+        xi, yi = to_int(x, span), to_int(y, span)
+        r = abs(xi) % abs(yi)
+        return r if xi >= 0 else -r
+    if op == "**":
+        if x == 0 and to_int(y, span) < 0:
+            raise fail("E0203", "division by zero (0 to a negative power)", span)
+        return _norm(Fraction(x) ** to_int(y, span))
+    if op == "<":
+        return int(x < y)
+    if op == "<=":
+        return int(x <= y)
+    if op == ">":
+        return int(x > y)
+    if op == ">=":
+        return int(x >= y)
+    xi, yi = to_int(x, span), to_int(y, span)
+    if op in ("<<", ">>") and yi < 0:
+        raise fail("E0202", f"negative shift count {yi}", span)
+    if op == "<<":
+        return xi << yi
+    if op == ">>":
+        return xi >> yi
+    if op == "&":
+        return xi & yi
+    if op == "|":
+        return xi | yi
+    if op == "^":
+        return xi ^ yi
+    raise fail("E0202", f"unsupported operator {op}", span)
 
 
 # A range is expanded into one label per value; past this size elaboration would run for

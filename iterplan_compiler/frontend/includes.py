@@ -15,15 +15,19 @@ from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
 
 
-def _resolve(name: str, including: str) -> tuple[str, str] | None:
-    """Return (display path, text) of an included file, or None."""
+def _resolve(name: str, including: str) -> tuple[str, str] | str | None:
+    """Return (display path, text) of an included file, None if it does not exist, or the
+    reason it cannot be read (a name too long for the OS, a NUL byte, permissions...)."""
     base = Path(including).parent if including and not including.startswith("<") else Path(".")
-    cand = base / name
-    if cand.is_file():
-        return str(cand), cand.read_text(encoding="utf-8-sig", errors="replace")
-    res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
-    if res.is_file():
-        return f"<stdlib>/{name}", res.read_text(encoding="utf-8")
+    try:
+        cand = base / name
+        if cand.is_file():
+            return str(cand), cand.read_text(encoding="utf-8-sig", errors="replace")
+        res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
+        if res.is_file():
+            return f"<stdlib>/{name}", res.read_text(encoding="utf-8", errors="replace")
+    except (OSError, ValueError) as e:  # ValueError: an embedded NUL byte
+        return getattr(e, "strerror", None) or str(e)
     return None
 
 
@@ -38,9 +42,11 @@ def expand_includes(spec: S.SpecFile, sources: dict[str, str], diags: list[Diagn
             out.append(d)
             continue
         found = _resolve(d.path, spec.path)
-        if found is None:
-            diags.append(error("E0801", f"included file '{d.path}' not found (searched next to "
-                               "the including file and in the bundled stdlib)", d.span))
+        if found is None or isinstance(found, str):
+            shown = d.path if len(d.path) <= 80 else d.path[:77] + "..."
+            why = ("not found (searched next to the including file and in the bundled stdlib)"
+                   if found is None else f"cannot be read: {found}")
+            diags.append(error("E0801", f"included file '{shown}' {why}", d.span))
             continue
         path, text = found
         if path in stack or path == spec.path:

@@ -23,6 +23,7 @@ from fractions import Fraction
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.frontend import syntax as S
 
@@ -94,6 +95,16 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
     uses this; elaboration has no modal semantics, so :func:`frontend.load` never sets it).
     """
     diags: list[Diagnostic] = []
+    cap = limits.current().max_declarations
+    n_decls = 0
+    for m in _DOT_RE.finditer(text):
+        if m.group(0) == ".":
+            n_decls += 1
+            if n_decls > cap:
+                line = text.count("\n", 0, m.start()) + 1
+                return S.SpecFile(path, ()), [error(
+                    "E0006", f"the file has more than {cap:,} top-level declarations: "
+                    f"{limits.hint('max_declarations')}", Span(path, line, 1))]
     lark = parser()
     decl_states = _decl_start_states(lark)
 
@@ -247,6 +258,13 @@ class _Builder:
         end_col = meta.end_column if meta.end_line == meta.line else None
         return Span(self.path, meta.line, meta.column, meta.end_line, end_col)
 
+    def int_lit(self, tok: Token) -> int:
+        """An integer literal; E0208 (not a crash) past ``--max-int-bits``."""
+        msg = limits.literal_too_large(str(tok))
+        if msg is not None:
+            raise self.bad(tok, msg, "E0208")
+        return parse_int(str(tok))
+
     def bad(self, node: Tree | Token, message: str, code: str = "E0004") -> _Malformed:
         return _Malformed(error(code, message, self.span(node)))
 
@@ -329,7 +347,7 @@ class _Builder:
             elif it.data == "spec_labels":
                 items.append(S.SpecItem(key, labels=self.label_set(it.children[1]), span=sp))
             elif it.data in ("spec_int", "spec_pair"):
-                ints = tuple(parse_int(str(c)) for c in it.children[1:])
+                ints = tuple(self.int_lit(c) for c in it.children[1:])
                 items.append(S.SpecItem(key, ints=ints, span=sp))
             else:
                 items.append(S.SpecItem(key, span=sp))
@@ -647,9 +665,13 @@ class _Builder:
         sp = self.span(t)
         c = t.children
         if d == "e_int":
-            return S.Num(parse_int(str(c[0])), sp)
+            return S.Num(self.int_lit(c[0]), sp)
         if d == "e_real":
-            return S.Num(Fraction(str(c[0])), sp)
+            text = str(c[0])
+            msg = limits.literal_too_large(text.replace(".", "").lstrip("0") or "0")
+            if msg is not None:
+                raise self.bad(c[0], msg.replace("integer literal", "number literal"), "E0208")
+            return S.Num(Fraction(text), sp)
         if d == "e_var":
             return S.Var(str(c[0]), sp)
         if d == "e_name":

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.expressions import (
@@ -211,6 +212,8 @@ class _Builder:
                 stack.pop()
                 continue
             action, e2 = item
+            if not len(self.trans) & 0x3FFF:  # every 16,384 transitions: --time-limit
+                limits.check_deadline()
             if action == TAU or action.startswith("tau."):
                 raise EvalError(error("E0306", "'tau' cannot be used as an action label",
                                       c.labels[k].span))

@@ -26,6 +26,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Sequence
 from itertools import product as _cartesian
 
+from iterplan_compiler import limits
+
 from .lts import ERROR, LTS, TAU
 
 __all__ = ["StateExplosion", "compose", "explore_product", "label_matcher", "Priority"]
@@ -40,7 +42,8 @@ class StateExplosion(Exception):
     """Raised when a product grows past ``max_states`` states."""
 
     def __init__(self, name: str, limit: int) -> None:
-        super().__init__(f"composition of {name} exceeds {limit} states")
+        super().__init__(f"composition of {name} exceeds {limit:,} states (the state limit; "
+                         "raise it with --max-states)")
         self.name = name
         self.limit = limit
 
@@ -234,6 +237,9 @@ def _explore(
                 k = len(order)
                 if max_states is not None and k >= max_states:
                     raise StateExplosion(name, max_states)
+                if not k & 0x3FFF:  # every 16,384 new states: progress, the time limit
+                    limits.progress(f"composing {name}", k)
+                    limits.check_deadline()
                 index[tgt] = k
                 order.append(tgt)
             out.append((a, k))

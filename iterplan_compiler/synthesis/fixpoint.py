@@ -54,6 +54,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from iterplan_compiler import limits
+
 Node = Any
 
 
@@ -106,6 +108,7 @@ def gr1_winning(
 
     Z = top
     while True:
+        limits.check_deadline()  # --time-limit inside the fixpoint
         stats["z"] += 1
         z_round_start = Z
         round_y: list[list[Node]] = []
@@ -154,6 +157,7 @@ def _mu_y(
     x_layers: list[list[Node]] = []
     r = 0
     while True:
+        limits.check_deadline()  # --time-limit inside the fixpoint
         stats["y"] += 1
         base = reach_goal | (cpre(Y) & Z)
         y_new = bdd.false
@@ -198,6 +202,7 @@ def _mu_y_chained(
     r = 0
     quiet = 0  # consecutive νX steps that did not grow Y
     while True:
+        limits.check_deadline()  # --time-limit inside the fixpoint
         stats["y"] += 1
         xs: list[Node] = []
         for i in range(len(A)):
@@ -226,6 +231,7 @@ def _nu_x(
     """``νX. base ∨ (not_a ∧ CPre(X))`` starting from ``start`` (an over-approximation)."""
     X = start
     while True:
+        limits.check_deadline()  # --time-limit inside the fixpoint
         stats["x"] += 1
         x_new = base | (not_a & cpre(X))
         x_new &= start  # keeps the iteration descending from the recycled start

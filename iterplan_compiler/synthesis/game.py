@@ -249,7 +249,10 @@ class SymbolicGame:
         """Forward-reachable states from ``init`` (also cached as ``self.reach``)."""
         R = self.init
         frontier = self.init
+        from iterplan_compiler import limits
+
         while frontier != self.bdd.false:
+            limits.check_deadline()  # --time-limit between image steps
             img = self.post(frontier)
             frontier = img & ~R
             R |= frontier
@@ -409,8 +412,15 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     if (g.init & W) == g.bdd.false:
         return False, None, _explain_symbolic(g, reach, W, explain)
     stats["winning_states"] = g.count(W)
+    from iterplan_compiler import limits
+
+    cap = limits.current().max_states
+    if stats["winning_states"] > cap:  # the controller is extracted explicitly from W
+        raise limits.LimitReached("max_states", limits.states_message(
+            cap, f"the winning region of {name or 'the game'} ({stats['winning_states']:,} "
+            "states, the controller's size)"))
     t = time.perf_counter()
-    game = subgame(g, W)
+    game = subgame(g, W, limit=cap)
     # H_j over the full reachable game, as MTSA computes it (§3.5)
     A = g.assumptions or [live]
     heights = []
