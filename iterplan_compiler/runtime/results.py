@@ -5,14 +5,24 @@ of ``iterc run``'s output files (CSV, GeoJSON, JSON summary, PNG plot), and the 
 from __future__ import annotations
 
 import csv
-import json
-from collections.abc import Sequence
+import io
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from iterplan_compiler.outputs import atomic_write_bytes, atomic_write_json, atomic_write_text
 from iterplan_compiler.runtime.grid import GridMap
+
+
+@contextmanager
+def _atomic_csv(path: str | Path) -> Iterator[io.StringIO]:
+    """A text buffer written to ``path`` atomically when the block ends (outputs.py)."""
+    buf = io.StringIO(newline="")
+    yield buf
+    atomic_write_text(path, buf.getvalue())
 
 
 @dataclass
@@ -42,7 +52,7 @@ class MissionResult:
     # -- outputs ------------------------------------------------------------------------------
     def write_track_csv(self, path: str | Path) -> None:
         lat, lon = self.grid.to_latlon(self.track[:, 1], self.track[:, 2])
-        with open(path, "w", newline="") as fh:
+        with _atomic_csv(path) as fh:
             w = csv.writer(fh)
             w.writerow(["t", "lat", "lon", "alt", "east", "north"])
             for (t, x, y, a), la, lo in zip(self.track, np.atleast_1d(lat), np.atleast_1d(lon), strict=False):
@@ -50,7 +60,7 @@ class MissionResult:
                             f"{y:.2f}"])
 
     def write_events_csv(self, path: str | Path) -> None:
-        with open(path, "w", newline="") as fh:
+        with _atomic_csv(path) as fh:
             w = csv.writer(fh)
             w.writerow(["t", "kind", "label", "state", "east", "north", "alt", "cell"])
             for e in self.log:
@@ -75,10 +85,10 @@ class MissionResult:
         return {"type": "FeatureCollection", "features": feats}
 
     def write_geojson(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.geojson(), indent=1, sort_keys=True) + "\n")
+        atomic_write_json(path, self.geojson(), indent=1)
 
     def write_summary(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.summary, indent=2, sort_keys=True) + "\n")
+        atomic_write_json(path, self.summary, indent=2)
 
     def plot(self, path: str | Path) -> None:
         """PNG of the map (locations and sensor cells shaded), the flown track, arrivals and
@@ -129,7 +139,9 @@ class MissionResult:
         ax.legend(handles=handles + ax.get_legend_handles_labels()[0], loc="upper right",
                   fontsize=7)
         fig.tight_layout()
-        fig.savefig(path)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png")
+        atomic_write_bytes(path, buf.getvalue())
         plt.close(fig)
 
 

@@ -5,12 +5,19 @@ the ``--until LABEL[:K]`` end condition."""
 from __future__ import annotations
 
 import csv
+import io
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from iterplan_compiler.outputs import (
+    OutputError,
+    atomic_write_text,
+    check_writable_dir,
+    refuse_overwrite_input,
+)
 from iterplan_compiler.runtime.bindings import canon
 
 OUTPUTS = ("track.csv", "track.geojson", "events.csv", "summary.json", "track.png",
@@ -18,27 +25,23 @@ OUTPUTS = ("track.csv", "track.geojson", "events.csv", "summary.json", "track.pn
 
 
 def check_out(out: Path, inputs: list[Path]) -> str | None:
-    """Problems with ``--out`` found before the mission (so a flight's log is never lost)."""
-    if out.exists() and not out.is_dir():
-        return f"--out {out} exists and is not a folder"
-    resolved = {p.resolve() for p in inputs if p.exists()}
-    if out.resolve() in resolved:
-        return f"--out {out} is an input file"
+    """Problems with ``--out`` found before the mission (so a flight's log is never lost):
+    not a writable folder, or a folder whose outputs would overwrite an input file."""
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".iterplan-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as exc:
-        return f"--out {out} is not writable: {exc.strerror or exc}"
-    for name in OUTPUTS:
-        if (out / name).resolve() in resolved:
-            return f"--out {out} would overwrite the input {out / name}"
+        refuse_overwrite_input(out, inputs)
+        check_writable_dir(out)
+        for name in OUTPUTS:
+            refuse_overwrite_input(out / name, inputs)
+    except OutputError as exc:
+        return f"--out {out}: {exc}"
     return None
 
 
 def write_outputs(result: Any, out: Path, vehicle: Any, plot: bool) -> None:
-    # A second Ctrl-C must not cut the outputs short.
+    """Every output file written atomically (``outputs.py``); files of a previous run are
+    removed first and ``summary.json`` comes last, so a folder with a ``summary.json`` holds
+    one whole set (``ok``/``reason`` in it say whether the mission completed).  A second
+    Ctrl-C must not cut the outputs short."""
     with _interrupts_deferred():
         for stale in OUTPUTS:               # never leave a previous run's files beside these
             (out / stale).unlink(missing_ok=True)
@@ -47,11 +50,12 @@ def write_outputs(result: Any, out: Path, vehicle: Any, plot: bool) -> None:
         result.write_events_csv(out / "events.csv")
         log = getattr(vehicle, "command_log", None)
         if log is not None:
-            with open(out / "commands.csv", "w", newline="") as fh:
-                w = csv.writer(fh)
-                w.writerow(["t", "command", "detail"])
-                for t, name, detail in log:
-                    w.writerow([f"{t:.2f}", name, detail])
+            buf = io.StringIO(newline="")
+            w = csv.writer(buf)
+            w.writerow(["t", "command", "detail"])
+            for t, name, detail in log:
+                w.writerow([f"{t:.2f}", name, detail])
+            atomic_write_text(out / "commands.csv", buf.getvalue())
         if plot:
             result.plot(out / "track.png")
         result.write_summary(out / "summary.json")    # last: its presence marks a whole set
