@@ -1,0 +1,142 @@
+"""``iterc check SPEC --safety/--progress COMPOSITE`` end to end (exit codes, LTSA text,
+diagnostics at the composite)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from iterplan_compiler import cli
+
+REPO = Path(__file__).resolve().parents[2]
+
+SPEC = """\
+P = (a -> b -> P | a -> c -> STOP).
+Q = (a -> b -> Q | c -> Q).
+||DEAD = (P || Q).
+property SAFE = (a -> b -> SAFE).
+R = (a -> b -> R | a -> a -> R).
+||BAD = (R || SAFE).
+fluent F = <a, b>
+ltl_property NOTWICE = [](F -> !a)
+||BADLTL = (R || NOTWICE).
+S = (a -> b -> S).
+||GOOD = (S || SAFE).
+progress PB = {b}
+progress IFC = if {x} then {y}
+progress IX[i:0..1] = {d[i]}
+D = (d[0] -> D | go -> E), E = (d[1] -> E).
+||STUCK = (D).
+T = (d[0] -> d[1] -> b -> T).
+||FINE = (T).
+"""
+
+DIAG = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): error\[(?P<code>E\d+)\]: "
+                  r"(?P<msg>.*)$", re.M)
+
+
+@pytest.fixture
+def spec(tmp_path):
+    p = tmp_path / "ltsa.lts"
+    p.write_text(SPEC)
+    return p
+
+
+def run(capsys, *argv):
+    capsys.readouterr()
+    code = cli.main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def line_of(text: str) -> int:
+    return next(i for i, l in enumerate(SPEC.splitlines(), 1) if text in l)
+
+
+def test_deadlock(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--safety", "DEAD")
+    assert code == 1
+    assert "Trace to DEADLOCK:\n\ta\n" in out
+    (d,) = DIAG.finditer(err)
+    assert d["code"] == "E1301" and d["file"] == str(spec)
+    assert int(d["line"]) == line_of("||DEAD") and int(d["col"]) >= 1
+    assert "Trace to DEADLOCK: a" in d["msg"]
+
+
+def test_property_violation_names_the_property(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--safety", "BAD")
+    assert code == 1
+    assert "Trace to property violation in SAFE:\n\ta\n\ta\n" in out
+    (d,) = DIAG.finditer(err)
+    assert d["code"] == "E1302" and int(d["line"]) == line_of("||BAD")
+    assert "note: SAFE is declared here" in err
+    assert f"{spec}:{line_of('property SAFE')}:" in err
+
+
+def test_ltl_property_violation(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--safety", "BADLTL")
+    assert code == 1
+    # F holds from the first a on, and that a is itself an a: the first a violates it
+    assert "Trace to property violation in NOTWICE:\n\ta\n" in out
+    assert "error[E1302]" in err
+
+
+def test_safe_composite_passes(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--safety", "GOOD")
+    assert code == 0, err
+    assert "No deadlocks/errors" in out
+    assert "ltsa.lts: ok" in out
+
+
+def test_progress_violations(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--progress", "STUCK")
+    assert code == 1
+    assert ("Progress violation: PB\nTrace to terminal set of states:\n\tgo\n"
+            "Cycle in terminal set:\n\td.1\nActions in terminal set:\n\t{d.1}\n") in out
+    assert "Progress violation: IX[0]" in out
+    assert "IX[1]" not in out and "IFC" not in out  # d.1 occurs; the if-set never does
+    codes = [(m["code"], int(m["line"])) for m in DIAG.finditer(err)]
+    assert codes == [("E1303", line_of("||STUCK"))] * 2
+    assert "note: progress PB is declared here" in err
+
+
+def test_progress_holds(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--progress", "FINE")
+    assert code == 0, err
+    assert "No progress violations detected." in out
+
+
+def test_default_progress_without_declarations(tmp_path, capsys):
+    p = tmp_path / "noprog.lts"
+    p.write_text("P = (start -> L), L = (work -> L).\n||SYS = (P).\n"
+                 "C = (a -> b -> C).\n||CYC = (C).\n")
+    code, out, err = run(capsys, "check", p, "--progress", "SYS")
+    assert code == 1
+    assert "Progress violation for actions:\n\t{start}\n" in out
+    assert "Trace to terminal set of states:\n\tstart\n" in out
+    assert "error[E1303]" in err
+    code, out, _ = run(capsys, "check", p, "--progress", "CYC")
+    assert code == 0 and "No progress violations detected." in out
+
+
+def test_both_checks_and_unknown_name(spec, capsys):
+    code, out, err = run(capsys, "check", spec, "--safety", "GOOD", "--progress", "FINE")
+    assert code == 0, err
+    code, out, err = run(capsys, "check", spec, "--safety", "NOPE")
+    assert code == 1
+    assert f"{spec}: error[E504]: no process or composite named 'NOPE'" in err
+
+
+def test_progress_is_no_longer_ignored(spec, capsys):
+    code, out, err = run(capsys, "check", spec)
+    assert code == 0
+    assert "W0151" not in err
+
+
+def test_bundled_example_is_deadlock_free(capsys):
+    code, out, err = run(capsys, "check", REPO / "examples" / "search_and_map.lts",
+                         "--safety", "SearchAndMapSystem", "--progress", "SearchAndMapSystem")
+    assert code == 0, err
+    assert "No deadlocks/errors" in out and "No progress violations detected." in out
