@@ -119,8 +119,13 @@ class Animator:
             notes.append("ERROR reached (a property is violated)")
         if states & self.lts.end_states:
             notes.append("END (successful termination)")
+        stuck = sorted(s for s in states if s != ERROR and s not in self.lts.end_states
+                       and not self._out.get(s))
         if not self.enabled() and not notes:
             notes.append("DEADLOCK (no action enabled)")
+        elif stuck:
+            # the trace may also have led to a deadlock state (nondeterminism)
+            notes.append(f"possibly DEADLOCK (state {', '.join(map(str, stuck))} has no action)")
         return "; ".join(notes)
 
     def trace_text(self) -> str:

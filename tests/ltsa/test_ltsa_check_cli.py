@@ -52,7 +52,7 @@ def run(capsys, *argv):
 
 
 def line_of(text: str) -> int:
-    return next(i for i, l in enumerate(SPEC.splitlines(), 1) if text in l)
+    return next(i for i, line in enumerate(SPEC.splitlines(), 1) if text in line)
 
 
 def test_deadlock(spec, capsys):
