@@ -8,8 +8,10 @@ With ``--print`` the parsed file is printed back as canonical FSP on stdout (the
 ``frontend/printer.py``; parsing the output gives the same syntax tree), and with
 ``--legality NAME`` MTSA's legality check is run on composite NAME (machine 0 is the
 controller, machine 1 the plant).
+``--safety NAME`` and ``--progress NAME`` run LTSA's deadlock/ERROR and progress checks on NAME
+(``commands/ltsa_checks.py``, ``docs/ltsa.md``).
 Exit code 0 if there are no errors (warnings are printed) and the legality check (if asked)
-passes, 1 otherwise.
+passes, 1 otherwise (also when a ``--safety``/``--progress`` check finds a violation).
 """
 
 from __future__ import annotations
