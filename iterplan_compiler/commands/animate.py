@@ -185,9 +185,15 @@ def scripted(animator, lines: Iterable[str], source: str) -> int:
 
 def interactive(animator) -> int:
     """The prompt_toolkit loop (a real terminal)."""
-    from prompt_toolkit import PromptSession
-    from prompt_toolkit.completion import WordCompleter
-    from prompt_toolkit.history import InMemoryHistory
+    try:
+        from prompt_toolkit import PromptSession
+        from prompt_toolkit.completion import WordCompleter
+        from prompt_toolkit.history import InMemoryHistory
+    except ImportError:  # a dependency of iterplan, but an install may have skipped it
+        print("iterc: error: the interactive animator needs prompt_toolkit: "
+              "pip install prompt_toolkit (or give the commands with --script FILE)",
+              file=sys.stderr)
+        return 1
 
     from iterplan_compiler.ir.animator import AnimationError
 

@@ -17,6 +17,7 @@ Semantics and examples: ``docs/ltsa.md``.
 from __future__ import annotations
 
 import difflib
+import re
 import sys
 from collections.abc import Iterable
 
@@ -26,9 +27,10 @@ from iterplan_compiler.ir.analysis import (
     check_progress,
     check_safety,
     default_progress,
+    tau_closure,
     terminal_sets,
 )
-from iterplan_compiler.ir.lts import ERROR, LTS, TAU
+from iterplan_compiler.ir.lts import ERROR, LTS
 
 E_DEADLOCK = "E1301"
 E_ERROR = "E1302"
@@ -81,31 +83,17 @@ def progress_properties(model) -> tuple[list[tuple[ProgressProperty, Span]], lis
     return out, diags
 
 
-def _tau_closure(out: dict[int, list[tuple[str, int]]], states: set[int]) -> set[int]:
-    todo = list(states)
-    seen = set(states)
-    while todo:
-        s = todo.pop()
-        if s == ERROR:
-            continue
-        for a, t in out.get(s, ()):
-            if a == TAU and t not in seen:
-                seen.add(t)
-                todo.append(t)
-    return seen
-
-
 def replays_to_error(machine: LTS, trace: tuple[str, ...]) -> bool:
     """Does ``machine`` (run alone on the actions of ``trace`` in its alphabet) reach ERROR on
     the trace's last action and not before?  Nondeterminism is followed as a set of states."""
     if not trace or trace[-1] not in machine.alphabet:
         return False
     out = machine.out_edges()
-    current = _tau_closure(out, {machine.initial})
+    current = tau_closure(out, {machine.initial})
     for k, a in enumerate(trace):
         if a not in machine.alphabet:
             continue
-        current = _tau_closure(out, {t for s in current if s != ERROR
+        current = tau_closure(out, {t for s in current if s != ERROR
                                      for b, t in out.get(s, ()) if b == a})
         if ERROR in current:
             return k == len(trace) - 1
@@ -131,8 +119,6 @@ def violated_property(model, target: str, lts: LTS, trace: tuple[str, ...]) -> s
     procs = getattr(backend, "processes", {})
 
     def rank(n: str) -> tuple[int, int]:
-        import re
-
         named = re.search(rf"(?<![\w.]){re.escape(n)}(?![\w])", mentioned) is not None
         is_prop = n in model.formulas or "property" in getattr(procs.get(n), "keywords", ())
         return (0 if named else 1, 0 if is_prop else 1)

@@ -36,7 +36,7 @@ from .lts import ERROR, LTS, TAU
 __all__ = [
     "SafetyResult", "TerminalSet", "ProgressProperty", "ProgressViolation",
     "shortest_paths", "trace_to", "check_safety", "terminal_sets", "check_progress",
-    "default_progress",
+    "default_progress", "tau_closure",
 ]
 
 
@@ -78,6 +78,22 @@ class ProgressProperty:
 class ProgressViolation:
     prop: ProgressProperty
     terminal: TerminalSet
+
+
+def tau_closure(out, states: Iterable[int]) -> frozenset[int]:
+    """``states`` and every state reachable from them by ``tau`` moves (``out``: a state's
+    ``[(label, target), ...]``, as :meth:`LTS.out_edges`); ERROR has no moves."""
+    seen = set(states)
+    todo = list(seen)
+    while todo:
+        s = todo.pop()
+        if s == ERROR:
+            continue
+        for a, t in out[s] if isinstance(out, list) else out.get(s, ()):
+            if a == TAU and t not in seen:
+                seen.add(t)
+                todo.append(t)
+    return frozenset(seen)
 
 
 def _out_edges(lts: LTS) -> list[list[tuple[str, int]]]:
@@ -130,7 +146,6 @@ def check_safety(lts: LTS) -> SafetyResult:
                     break
         if deadlock is not None and error is not None:
             break
-    # A shortest ERROR trace: the first source in BFS order gives the shortest prefix.
     return SafetyResult(deadlock, deadlock_state, error, len(parent))
 
 

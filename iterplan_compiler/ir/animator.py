@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from .analysis import tau_closure as _tau_closure
 from .formulas import Fluent
 from .lts import ERROR, LTS, TAU
 
@@ -30,20 +31,6 @@ MAX_FLUENTS_SHOWN = 24
 
 class AnimationError(Exception):
     """A move that the current position does not allow (the message says why)."""
-
-
-def _tau_closure(out: Mapping[int, list[tuple[str, int]]], states: set[int]) -> frozenset[int]:
-    todo = list(states)
-    seen = set(states)
-    while todo:
-        s = todo.pop()
-        if s == ERROR:
-            continue
-        for a, t in out.get(s, ()):
-            if a == TAU and t not in seen:
-                seen.add(t)
-                todo.append(t)
-    return frozenset(seen)
 
 
 @dataclass
