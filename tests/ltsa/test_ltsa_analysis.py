@@ -85,6 +85,19 @@ def test_against_networkx(edges):
     reach = nx.descendants(g, 0) | {0}
     dist = nx.single_source_shortest_path_length(g, 0)
     r = check_safety(lts)
+    out = lts.out_edges()
+
+    def walk(trace):  # the trace is a path of the (deterministic here or not) machine
+        states = {0}
+        for a in trace:
+            states = {t for s in states if s != ERROR for b, t in out[s] if b == a}
+            assert states
+        return states
+
+    if r.deadlock is not None:
+        assert r.deadlock_state in walk(r.deadlock)
+    if r.error is not None:
+        assert ERROR in walk(r.error)
     dead = [s for s in reach if s != "ERR" and g.out_degree(s) == 0]
     if dead:
         assert r.deadlock is not None
@@ -106,5 +119,6 @@ def test_against_networkx(edges):
     got = terminal_sets(lts)
     assert {ts.states for ts in got} == expected
     for ts in got:
+        assert ts.entry in walk(ts.trace)
         assert len(ts.trace) == min(dist[s] for s in ts.states)
         assert ts.actions == {d["label"] for s, t, d in sub.edges(data=True) if s in ts.states}

@@ -140,3 +140,22 @@ def test_bundled_example_is_deadlock_free(capsys):
                          "--safety", "SearchAndMapSystem", "--progress", "SearchAndMapSystem")
     assert code == 0, err
     assert "No deadlocks/errors" in out and "No progress violations detected." in out
+
+
+def test_explicit_error_in_a_process_is_named(tmp_path, capsys):
+    p = tmp_path / "err.lts"
+    p.write_text("P = (a -> ERROR | b -> P).\n||S = (P).\n")
+    code, out, err = run(capsys, "check", p, "--safety", "S")
+    assert code == 1
+    assert "Trace to property violation in P:\n\ta\n" in out
+    assert f"{p}:2:3: error[E1302]" in err
+
+
+@pytest.mark.parametrize("text", ["P = (a -> .\n", "||S = (P || Q).\n"])
+def test_bad_input_is_a_diagnostic(tmp_path, capsys, text):
+    p = tmp_path / "bad.lts"
+    p.write_text(text)
+    for option in ("--safety", "--progress"):
+        code, out, err = run(capsys, "check", p, option, "S")
+        assert code == 1
+        assert "error[" in err and "Traceback" not in err
