@@ -17,7 +17,7 @@ precedence needs them:
   ``U W -> <->``, then ``||``; the right-hand side of a declaration is a unary formula, so a
   top-level binary formula is parenthesised.
 
-Declarations the front-end ignores (``progress``, ``menu``, ``animation``) keep only their kind
+Declarations the front-end ignores (``menu``, ``animation``) keep only their kind
 and name in the tree; they print as an empty declaration of that kind (which parses back to the
 same node).
 """

@@ -589,8 +589,8 @@ class CompositeDecl:
 
 @dataclass(frozen=True)
 class IgnoredDecl:
-    """A declaration that is parsed but has no meaning here (``progress``, ``menu``,
-    ``animation``); elaboration warns once."""
+    """A declaration that is parsed but has no meaning here (``menu``, ``animation``);
+    elaboration warns once."""
 
     kind: str
     name: str

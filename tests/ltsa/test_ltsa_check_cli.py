@@ -159,3 +159,11 @@ def test_bad_input_is_a_diagnostic(tmp_path, capsys, text):
         code, out, err = run(capsys, "check", p, option, "S")
         assert code == 1
         assert "error[" in err and "Traceback" not in err
+
+
+def test_progress_declarations_print_back(spec, capsys):
+    code, out, _ = run(capsys, "check", spec, "--print")
+    assert code == 0
+    assert "progress PB = {b}\n" in out
+    assert "progress IFC = if {x} then {y}\n" in out
+    assert "progress IX[i:0..1] = {d[i]}\n" in out
