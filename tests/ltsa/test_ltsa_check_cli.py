@@ -167,3 +167,40 @@ def test_progress_declarations_print_back(spec, capsys):
     assert "progress PB = {b}\n" in out
     assert "progress IFC = if {x} then {y}\n" in out
     assert "progress IX[i:0..1] = {d[i]}\n" in out
+
+
+# A single-lane bridge (the classic progress example, written afresh): cars of one colour
+# may share the bridge, entering and leaving in order; under congestion (exits at low priority)
+# the colour on the bridge can keep it for ever.
+BRIDGE = """\
+const N = 3
+range ID = 1..N
+CAR = (enter -> exit -> CAR).
+INORDER = C[1], C[i:ID] = ([i].enter -> C[i % N + 1]).
+OUTORDER = C[1], C[i:ID] = ([i].exit -> C[i % N + 1]).
+||CONVOY = ([ID]:CAR || INORDER || OUTORDER).
+BRIDGE = B[0][0],
+B[nr:0..N][nb:0..N] = (when nb == 0 red[ID].enter -> B[nr + 1][nb]
+                     | red[ID].exit -> B[nr - 1][nb]
+                     | when nr == 0 blue[ID].enter -> B[nr][nb + 1]
+                     | blue[ID].exit -> B[nr][nb - 1]).
+||FREE = (red:CONVOY || blue:CONVOY || BRIDGE).
+||CONGESTED = FREE >> {red[ID].exit, blue[ID].exit}.
+progress BLUECROSS = {blue[ID].enter}
+progress REDCROSS = {red[ID].enter}
+"""
+
+
+def test_congested_bridge_starves_a_colour(tmp_path, capsys):
+    p = tmp_path / "bridge.lts"
+    p.write_text(BRIDGE)
+    code, out, err = run(capsys, "check", p, "--safety", "FREE", "--progress", "FREE")
+    assert code == 0, err
+    assert "No deadlocks/errors" in out and "No progress violations detected." in out
+    code, out, err = run(capsys, "check", p, "--progress", "CONGESTED")
+    assert code == 1
+    assert "Progress violation: BLUECROSS\nTrace to terminal set of states:\n\tred.1.enter\n" in out
+    assert "Progress violation: REDCROSS\nTrace to terminal set of states:\n\tblue.1.enter\n" in out
+    assert ("Actions in terminal set:\n\t{red.1.enter, red.1.exit, red.2.enter, red.2.exit, "
+            "red.3.enter, red.3.exit}\n") in out
+    assert [m["code"] for m in DIAG.finditer(err)] == ["E1303", "E1303"]
