@@ -38,6 +38,7 @@ COMMANDS: dict[str, str] = {
     "demo": "compile the bundled Fire Patrol example and fly it in the simulator",
     "conformance": "run the MTSA conformance corpus and print a report",
     "experiment": "reproduce the paper's Fig. 3 experiments",
+    "animate": "animate a process or composite: pick actions, undo, save the trace",
 }
 
 #: commands that compile specs and so take the resource-limit flags (limits.py)

@@ -8,8 +8,10 @@ With ``--print`` the parsed file is printed back as canonical FSP on stdout (the
 ``frontend/printer.py``; parsing the output gives the same syntax tree), and with
 ``--legality NAME`` MTSA's legality check is run on composite NAME (machine 0 is the
 controller, machine 1 the plant).
+``--safety NAME`` and ``--progress NAME`` run LTSA's deadlock/ERROR and progress checks on NAME
+(``commands/ltsa_checks.py``, ``docs/ltsa.md``).
 Exit code 0 if there are no errors (warnings are printed) and the legality check (if asked)
-passes, 1 otherwise.
+passes, 1 otherwise (also when a ``--safety``/``--progress`` check finds a violation).
 """
 
 from __future__ import annotations
@@ -33,6 +35,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--legality", metavar="COMPOSITE",
                         help="check that machine 0 of COMPOSITE never blocks an uncontrollable "
                         "action of machine 1 (MTSA's LegalityAnalyser)")
+    # LTSA's analyses (commands/ltsa_checks.py, docs/ltsa.md)
+    parser.add_argument("--safety", metavar="COMPOSITE", action="append",
+                        help="report a reachable deadlock or ERROR state of COMPOSITE with the "
+                        "shortest trace to it (repeatable)")
+    parser.add_argument("--progress", metavar="COMPOSITE", action="append",
+                        help="check the spec's progress properties on COMPOSITE (fair choice; "
+                        "without any, every action in every terminal set) (repeatable)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -58,6 +67,11 @@ def run(args: argparse.Namespace) -> int:
         legal, detail = model.legality(args.legality)
         print(f"{args.legality}: {detail}")
         if not legal:
+            return 1
+    if getattr(args, "safety", None) or getattr(args, "progress", None):
+        from iterplan_compiler.commands.ltsa_checks import run_checks
+
+        if run_checks(args, model):
             return 1
     print(f"{args.spec}: ok ({len(model.processes)} processes, {len(model.composites)} "
           f"composites, {len(model.fluents)} fluents, {len(model.formulas)} formulas, "

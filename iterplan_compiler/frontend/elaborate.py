@@ -117,6 +117,8 @@ class Elaborator(ModelBackend):
         self.formula_decls: dict[str, S.FormulaDecl] = {}
         self.fluent_decls: dict[str, S.FluentDecl] = {}
         self.spec_decls: dict[str, S.SpecDecl] = {}
+        # `progress` declarations, evaluated by `iterc check --progress` (ir/analysis.py)
+        self.progress_decls: dict[str, S.ProgressDecl] = {}
         self.fluents: dict[str, F.Fluent] = {}
         self.fluent_families: dict[str, list[str]] = {}
         self.formulas: dict[str, F.NamedFormula] = {}
@@ -193,6 +195,9 @@ class Elaborator(ModelBackend):
                 elif isinstance(d, S.SpecDecl):
                     if not dup("controllerSpec", d.name, d.span):
                         self.spec_decls[d.name] = d
+                elif isinstance(d, S.ProgressDecl):
+                    if not dup("progress", d.name, d.span):
+                        self.progress_decls[d.name] = d
                 elif isinstance(d, S.IgnoredDecl):
                     diags.append(warning("W0151", f"'{d.kind}' declaration {d.name} is ignored",
                                          d.span))

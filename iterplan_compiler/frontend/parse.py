@@ -300,8 +300,13 @@ class _Builder:
         tok = t.children[0]
         return S.IncludeDecl(str(tok)[1:-1], self.span(tok))
 
-    def d_progress_decl(self, t: Tree) -> S.IgnoredDecl:
-        return S.IgnoredDecl("progress", str(t.children[0]), self.span(t))
+    def d_progress_decl(self, t: Tree) -> S.ProgressDecl:
+        name = t.children[0]
+        rest = [c for c in t.children[1:] if isinstance(c, Tree)]
+        sets = [self.set_lit(c) for c in rest if c.data == "set_lit"]
+        idx = tuple(self.bracket(c) for c in rest if c.data != "set_lit")
+        cond = sets[0] if len(sets) == 2 else None
+        return S.ProgressDecl(str(name), idx, cond, sets[-1], self.span(name))
 
     def d_menu_decl(self, t: Tree) -> S.IgnoredDecl:
         return S.IgnoredDecl("menu", str(t.children[0]), self.span(t))

@@ -17,7 +17,7 @@ precedence needs them:
   ``U W -> <->``, then ``||``; the right-hand side of a declaration is a unary formula, so a
   top-level binary formula is parenthesised.
 
-Declarations the front-end ignores (``progress``, ``menu``, ``animation``) keep only their kind
+Declarations the front-end ignores (``menu``, ``animation``) keep only their kind
 and name in the tree; they print as an empty declaration of that kind (which parses back to the
 same node).
 """
@@ -361,6 +361,11 @@ def print_decl(d: S.Decl) -> str:
         return _process(d)
     if isinstance(d, S.CompositeDecl):
         return _composite(d)
+    if isinstance(d, S.ProgressDecl):
+        head = f"progress {d.name}{''.join(_part(p) for p in d.indices)} = "
+        if d.condition is not None:
+            return head + f"if {_set_lit(d.condition)} then {_set_lit(d.actions)}"
+        return head + _set_lit(d.actions)
     if isinstance(d, S.IgnoredDecl):
         if d.kind == "animation":
             return f'animation {d.name} = ""'

@@ -589,16 +589,28 @@ class CompositeDecl:
 
 @dataclass(frozen=True)
 class IgnoredDecl:
-    """A declaration that is parsed but has no meaning here (``progress``, ``menu``,
-    ``animation``); elaboration warns once."""
+    """A declaration that is parsed but has no meaning here (``menu``, ``animation``);
+    elaboration warns once."""
 
     kind: str
     name: str
     span: Span = _span()
 
 
+@dataclass(frozen=True)
+class ProgressDecl:
+    """``progress P[i:R] = {a, b}`` or ``progress P = if {a} then {b}`` (LTSA progress
+    property, checked by ``iterc check --progress``; ``condition`` is the ``if`` set)."""
+
+    name: str
+    indices: tuple[Part, ...]
+    condition: SetLit | None
+    actions: SetLit
+    span: Span = _span()
+
+
 Decl = (ConstDecl | RangeDecl | SetDecl | DefDecl | IncludeDecl | FluentDecl | FormulaDecl
-        | SpecDecl | ProcessDecl | CompositeDecl | IgnoredDecl)
+        | SpecDecl | ProcessDecl | CompositeDecl | IgnoredDecl | ProgressDecl)
 
 
 @dataclass(frozen=True)
