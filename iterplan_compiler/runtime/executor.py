@@ -331,8 +331,10 @@ class Executor:
         now = time.monotonic()
         due = self._pace_mark + dt / self.cfg.realtime
         if due > now:
+            clock = self.cfg.compute_clock
+            before = clock()
             time.sleep(due - now)
-            self._mark += due - now          # sleeping is not think time
+            self._mark += clock() - before   # sleeping is not think time (on any clock)
         self._pace_mark = max(due, now - 1.0)  # never "catch up" more than a second
 
     def _check_wall(self) -> None:
