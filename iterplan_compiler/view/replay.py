@@ -29,6 +29,17 @@ def _float(text: str) -> float:
     return v
 
 
+def _monotonic(rows: list[list]) -> None:
+    """Mission time restarts at 0 when the controller starts (take-off rows come first, timed
+    from the vehicle's start): shift each earlier stretch so the times only grow (take-off gets
+    negative mission times).  Rows stay in file order, which is the order they happened in."""
+    for i in range(len(rows) - 1, 0, -1):
+        if rows[i][0] < rows[i - 1][0] - 1e-9:
+            shift = rows[i][0] - rows[i - 1][0]
+            for r in rows[:i]:
+                r[0] = round(r[0] + shift, 3)
+
+
 def load_run(run_dir: str | Path, grid: Any = None) -> dict:
     run = Path(run_dir)
     if not run.is_dir():
@@ -54,8 +65,8 @@ def load_run(run_dir: str | Path, grid: Any = None) -> dict:
         raise ReplayError(f"{run}: cannot read the run: {exc}") from None
     if not track:
         raise ReplayError(f"{run}/track.csv has no points")
-    track.sort(key=lambda r: r[0])
-    events.sort(key=lambda r: r[0])
+    _monotonic(track)
+    _monotonic(events)
     # ENU -> lat/lon: from the track's own columns (a linear fit is exact for the local frame).
     ax, bx = min(track, key=lambda r: r[4]), max(track, key=lambda r: r[4])
     ay, by = min(track, key=lambda r: r[5]), max(track, key=lambda r: r[5])

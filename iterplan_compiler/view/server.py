@@ -150,9 +150,9 @@ class ViewServer:
         asyncio.set_event_loop(loop)
         try:
             runner = web.AppRunner(make_app(self.hub, self.poll), access_log=None,
-                                   handle_signals=False)
+                                   handle_signals=False, shutdown_timeout=1.0)
             loop.run_until_complete(runner.setup())
-            site = web.TCPSite(runner, self.host, self.port, shutdown_timeout=1.0)
+            site = web.TCPSite(runner, self.host, self.port)
             loop.run_until_complete(site.start())
             self._runner = runner
             self.port = int(runner.addresses[0][1])

@@ -177,6 +177,8 @@ class Observer:
         self._iterator: Any = None
         self._sent: np.ndarray | None = None
         self._path_key: Any = None
+        self._first_key: Any = None
+        self._first_val: list[int] = []
         self._start: tuple[float, float] | None = None
         self._ideal = 0.0
         self._last_pt: tuple[float, float] | None = None
@@ -271,10 +273,7 @@ class Observer:
                                "next_cell": n, "done": int(it.num_done),
                                "remaining": int(it.remaining_count()),
                                "total": int(len(it.ids))}
-        # The sorter's first few: only the already-sorted prefix of R is read (no sorting here:
-        # the observer must not change what the executor would compute, nor when).
-        head, upto = it._head, min(it._sorted_to, it._head + FIRST_K)
-        first = it.ids[it._queue[head:upto]] if upto > head else ()
+        first = self._first(it)
         out["first"] = [grid.cell_name(int(c)) for c in first]
         out["first_cells"] = [int(c) for c in first]
         # D as deltas, on maps the page draws cell by cell.
@@ -292,6 +291,29 @@ class Observer:
                 self._sent[new] = True
                 d["done_new"] = [int(c) for c in it.ids[new]]
         return out
+
+    def _first(self, it: Any) -> list[int]:
+        """The sorter's first few of R, read without changing the iterator (the observer must
+        not change what the executor computes, nor when): the sorted prefix when there is one,
+        else the smallest sort keys (a copy; computed once per re-sort, O(|R|))."""
+        head, sorted_to = it._head, it._sorted_to
+        key = (id(it), it.resorts, head, sorted_to)
+        if key == self._first_key:
+            return self._first_val
+        queue, keys = it._queue, it._keys
+        if sorted_to >= min(head + FIRST_K, len(queue)):
+            pos = queue[head:head + FIRST_K]
+        else:
+            k = keys[head:]
+            m = min(FIRST_K, len(k))
+            if m == 0:
+                pos = queue[:0]
+            else:
+                part = np.argpartition(k, m - 1)[:m] if m < len(k) else np.arange(len(k))
+                part = part[np.lexsort((part, k[part]))]
+                pos = queue[head:][part]
+        self._first_key, self._first_val = key, [int(c) for c in it.ids[pos]]
+        return self._first_val
 
     def _path(self, ex: Any, d: dict) -> None:
         pl = ex.planner
