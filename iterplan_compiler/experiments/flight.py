@@ -73,9 +73,11 @@ def example_bindings(grid, data: dict | None):
 def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
-        map_data: dict | None = None, full_log: bool = False) -> FlightResult:
+        map_data: dict | None = None, full_log: bool = False,
+        observe: Callable | None = None, realtime: float | None = None) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
-    ``max_time`` simulated seconds).  Raises :class:`StageError` if the runtime is missing or
+    ``max_time`` simulated seconds).  ``observe``/``realtime`` go to the executor's RunConfig
+    (the live view, ``iterc demo --view``).  Raises :class:`StageError` if the runtime is missing or
     the module cannot be loaded."""
     try:
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
@@ -120,7 +122,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
                     max_time=max_time, log_limit=0, end_action=SafeAction.LOITER,
                     fault_action=SafeAction.LOITER,
-                    compute_clock=time.process_time, on_event=on_controller_event)
+                    compute_clock=time.process_time, on_event=on_controller_event,
+                    observe=observe, realtime=realtime)
     try:
         # map_data=None: the rules load_map put on the grid (the executor applies them itself).
         bindings = None if map_data is None else example_bindings(grid, map_data)
