@@ -292,3 +292,12 @@ def test_view_command_serves_the_replay(tmp_path):
         proc.terminate()
         assert proc.wait(20) == 0
         proc.stdout.close()
+
+
+@needs_view
+def test_demo_with_view(tmp_path, capsys):
+    rc = main(["demo", "--out", str(tmp_path / "d"), "--quiet", "--view", "--realtime", "0",
+               "--view-linger", "0"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    assert "live view: http://127.0.0.1:" in cap.out and "all patrol cells visited yes" in cap.out

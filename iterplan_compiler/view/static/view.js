@@ -25,6 +25,7 @@
       layers.track = L.polyline([], { color: "#1f4e9c", weight: 2, opacity: 0.85 }).addTo(map);
       layers.path = L.polyline([], { color: "#7c3aed", weight: 2, dashArray: "6 5" }).addTo(map);
       layers.photos = L.layerGroup().addTo(map);
+      layers.first = L.layerGroup().addTo(map);
       var icon = L.divIcon({
         className: "aircraft-icon", iconSize: [30, 30], iconAnchor: [15, 15],
         html: '<svg id="aircraft-svg" width="30" height="30" viewBox="-15 -15 30 30">' +
@@ -62,9 +63,27 @@
       leg += '<i style="background:' + s.colour + '"></i>' + s.name + " (" + s.count + ")";
     });
     leg += '<i style="background:#fff;border:2px solid #15803d"></i>done (D)' +
-           '<i style="background:#fff;border:2px solid #1d4ed8"></i>next n';
+           '<i style="background:#fff;border:2px solid #1d4ed8"></i>next n' +
+           '<i style="background:#1d4ed8;border-radius:50%"></i>sorter\'s first' +
+           '<i style="background:#1f4e9c;height:2px"></i>track' +
+           '<i style="background:#7c3aed;height:2px"></i>planned path' +
+           '<i style="background:#ef4444;border-radius:50%"></i>photo';
     $("legend").innerHTML = leg + (m.per_cell ? "" : "<br>" + m.locations +
       " locations: only the sensor cells are drawn");
+  }
+
+  var firstKey = "";
+  function drawFirst(cells) {      // the sorter's first few of R, numbered on the map
+    var key = cells.join(",");
+    if (key === firstKey) return;
+    firstKey = key;
+    layers.first.clearLayers();
+    cells.forEach(function (c, i) {
+      if (!rects[c]) return;
+      L.marker(rects[c].getBounds().getCenter(), { interactive: false, icon: L.divIcon({
+        className: "first-icon", iconSize: [16, 16], iconAnchor: [8, 8], html: String(i + 1) }) })
+        .addTo(layers.first);
+    });
   }
 
   function styleCell(c) {
@@ -109,6 +128,7 @@
     });
     if ("path" in d) { S.path = d.path; layers.path.setLatLngs(d.path || []); }
     if (S.it) { restyle[prevNext] = 1; restyle[S.it.next_cell] = 1; }
+    if (d.it && layers.first) drawFirst(d.it.first_cells || []);
     if (full) Object.keys(rects).forEach(function (c) { restyle[c] = 1; });
     Object.keys(restyle).forEach(function (c) { if (c !== "null" && c !== "undefined") styleCell(+c); });
     render();
