@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         _say(f"      {k:<24} {v}")
     files = write_outputs(out, result, grid, summary)
     _say("      wrote " + ", ".join(str(f) for f in files))
-    from iterplan_compiler.view import cli as view_cli       # live view (issue 16)
+    from iterplan_compiler.view import cli as view_cli  # live view (issue 16)
     view_cli.finish(view, args, interrupted=result.reason == "interrupted")
     return 0 if summary["all patrol cells visited"] == "yes" else 1
 
@@ -108,7 +108,7 @@ def _fly(module: Path, map_name: str, args):
     from iterplan_compiler.view import cli as view_cli
     from iterplan_compiler.view.live import ViewError
     try:
-        view = view_cli.start(args, grid, title="iterc demo: Fire Patrol")
+        view = view_cli.start(args, grid, title="iterc demo: Fire Patrol", open_browser=True)
     except ViewError as exc:
         raise StageError("view", str(exc)) from None
     try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
 import sys
 from collections.abc import Iterator
@@ -47,15 +48,31 @@ def realtime(args: argparse.Namespace) -> float | None:
     return rt or None
 
 
-def start(args: argparse.Namespace, grid: Any, title: str = "") -> Any:
-    """The LiveView asked for by ``--view`` (None without it); raises ViewError."""
+def start(args: argparse.Namespace, grid: Any, title: str = "",
+          open_browser: bool = False) -> Any:
+    """The LiveView asked for by ``--view`` (None without it); raises ViewError.  With
+    ``open_browser`` (``iterc demo``) the page is also opened in the desktop's browser, when
+    there is a desktop (not in CI, not with ``ITERPLAN_NO_BROWSER`` set)."""
     if args.view is None:
         return None
     from iterplan_compiler.view.live import LiveView
 
     view = LiveView(grid, args.view, title=title)
     print(f"live view: {view.url}", flush=True)
+    if open_browser and _desktop():
+        import webbrowser
+        try:
+            webbrowser.open(view.url)
+        except Exception:  # noqa: BLE001 - the URL is printed anyway
+            pass
     return view
+
+
+def _desktop() -> bool:
+    if os.environ.get("CI") or os.environ.get("ITERPLAN_NO_BROWSER"):
+        return False
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+                or sys.platform in ("darwin", "win32"))
 
 
 def finish(view: Any, args: argparse.Namespace, interrupted: bool = False) -> None:

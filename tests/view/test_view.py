@@ -295,9 +295,38 @@ def test_view_command_serves_the_replay(tmp_path):
 
 
 @needs_view
-def test_demo_with_view(tmp_path, capsys):
+def test_demo_with_view(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("ITERPLAN_NO_BROWSER", "1")
     rc = main(["demo", "--out", str(tmp_path / "d"), "--quiet", "--view", "--realtime", "0",
                "--view-linger", "0"])
     cap = capsys.readouterr()
     assert rc == 0, cap.err
     assert "live view: http://127.0.0.1:" in cap.out and "all patrol cells visited yes" in cap.out
+
+
+def test_observer_on_a_mavlink_vehicle():
+    """Mode and link health come from the MAVLink vehicle (loopback ArduPlane peer)."""
+    from iterplan_compiler.runtime.mavlink import MavlinkVehicle
+    from tests.runtime.test_mavlink import FAST, MAP, start_peer
+
+    grid = load_map(data=MAP)
+    peer, _sim, url = start_peer(grid)
+    hub = Hub(map_message(grid))
+    deltas = []
+    orig = hub.publish
+    hub.publish = lambda d: (deltas.append(d), orig(d))[1]   # type: ignore[method-assign]
+    try:
+        v = MavlinkVehicle.connect(url, grid.frame, FAST)
+        try:
+            r = Executor(TABLE, grid, v, config=RunConfig(planner_mode="carrot", max_wall=120,
+                                                          observe=Observer(hub, rate=20))).run()
+        finally:
+            v.close()
+    finally:
+        peer.stop()
+    assert r.ok, r.reason
+    st = hub.state()
+    assert st["simulated"] is False and st["link_ok"] is True
+    assert {d["mode"] for d in deltas} >= {"GUIDED"}
+    assert st["phase"] == "mission completed" and st["it"]["done"] == 30
+    assert len(deltas) > 5 and st["counts"]["arrived"] == 3
