@@ -136,7 +136,7 @@ def with_view(grid_of, run):
     return wall, s, view.observe.snapshots, view.observe.seconds, got
 
 
-def view_comparison(n: int, passes: int, repeat: int) -> None:
+def view_comparison(n: int, passes: int, repeat: int, only: str = "") -> None:
     import statistics
 
     from iterplan_compiler.runtime.grid import load_map
@@ -155,6 +155,8 @@ def view_comparison(n: int, passes: int, repeat: int) -> None:
          lambda obs: tick_bound(passes, obs), "ticks"),
     ]
     for title, grid_of, run, unit in cases:
+        if only and only not in title:
+            continue
         rows: dict[str, list[float]] = {"wall": [], "cpu": [], "wall_v": [], "cpu_v": []}
         extra = []
         for i in range(repeat):
@@ -177,9 +179,13 @@ def view_comparison(n: int, passes: int, repeat: int) -> None:
         for kind in ("cpu", "wall"):
             a, b = med[kind], med[kind + "_v"]
             a1, b1 = best[kind], best[kind + "_v"]
+            # Paired: each viewed run against the plain run next to it (ABBA), so slow drifts
+            # of the machine's load cancel; the median of those ratios.
+            paired = statistics.median(v / p for p, v in zip(rows[kind], rows[kind + "_v"],
+                                                            strict=True)) - 1
             print(f"  {kind:>4}: without view {a:.2f} s ({work / a:,.0f} {unit}/s), with view "
                   f"{b:.2f} s ({work / b:,.0f} {unit}/s): slow-down {(b - a) / a * 100:+.1f} %"
-                  f" (best runs: {a1:.2f} / {b1:.2f} s, {(b1 - a1) / a1 * 100:+.1f} %)"
+                  f" (paired {paired * 100:+.1f} %; best runs: {a1:.2f} / {b1:.2f} s, {(b1 - a1) / a1 * 100:+.1f} %)"
                   f"  [without {' '.join(f'{x:.2f}' for x in rows[kind])}; with "
                   f"{' '.join(f'{x:.2f}' for x in rows[kind + '_v'])}]")
         print(f"  per viewed run: {snaps} snapshots, {secs * 1000:.0f} ms CPU in the observer, "
@@ -194,10 +200,12 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5, help="runs of each kind with --view")
     ap.add_argument("--passes", type=int, default=60,
                     help="passes of the tick-bound mission with --view")
+    ap.add_argument("--only", choices=("iteration", "tick"), default="",
+                    help="with --view: only the iteration-bound or the tick-bound comparison")
     args = ap.parse_args()
     n = args.locations
     if args.view:
-        view_comparison(n, args.passes, args.repeat)
+        view_comparison(n, args.passes, args.repeat, args.only)
         return
     wall, steps = bare_loop(n)
     print(f"bare Controller+Iterator pass over {n:,} locations: {wall:.2f} s, "

@@ -36,6 +36,7 @@ MAX_CELLS = 6000
 MAX_SENSOR_CELLS = 6000
 #: Track points kept for a newly connected page (older ones are thinned out).
 MAX_TRACK = 20000
+TRACK_PER_DELTA = 50   # at most this many new track points per snapshot (the last always)
 LOG_KEEP = 60          # log entries a newly connected page gets
 LOG_PER_DELTA = 40     # at most this many new log entries per snapshot
 FIRST_K = 5            # the sorter's first few (R in offered order, already sorted prefix only)
@@ -218,6 +219,10 @@ class Observer:
             self._track_i = 0
         new = tr[self._track_i:]
         self._track_i = len(tr)
+        if len(new) > TRACK_PER_DELTA:      # a run much faster than real time: thin it out
+            step = -(-len(new) // TRACK_PER_DELTA)
+            new = new[step - 1::step] if (len(new) - 1) % step == step - 1 else \
+                [*new[step - 1::step], new[-1]]
         if new:
             xs = np.fromiter((q[1] for q in new), float, len(new))
             ys = np.fromiter((q[2] for q in new), float, len(new))
