@@ -133,7 +133,7 @@ def with_view(grid_of, run):
         client.wait(30)
         client.stdout.close()
         view.close()
-    return wall, s, view.observe.snapshots, view.observe.seconds, got
+    return wall, s, view.observe.snapshots, (view.observe.seconds, view.server.cpu_s), got
 
 
 def view_comparison(n: int, passes: int, repeat: int, only: str = "") -> None:
@@ -188,8 +188,10 @@ def view_comparison(n: int, passes: int, repeat: int, only: str = "") -> None:
                   f" (paired {paired * 100:+.1f} %; best runs: {a1:.2f} / {b1:.2f} s, {(b1 - a1) / a1 * 100:+.1f} %)"
                   f"  [without {' '.join(f'{x:.2f}' for x in rows[kind])}; with "
                   f"{' '.join(f'{x:.2f}' for x in rows[kind + '_v'])}]")
-        print(f"  per viewed run: {snaps} snapshots, {secs * 1000:.0f} ms CPU in the observer, "
-              f"{got} messages to the page")
+        obs_s, srv_s = secs
+        print(f"  per viewed run: {snaps} snapshots, {got} messages to the page; CPU "
+              f"{obs_s * 1000:.0f} ms in the observer and {srv_s * 1000:.0f} ms in the server "
+              f"thread = {(obs_s + srv_s) / med['cpu'] * 100:.1f} % of a run")
 
 
 def main() -> None:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import asyncio
 import json
 import threading
+import time
 from pathlib import Path
 
 from aiohttp import WSMsgType, web
@@ -129,6 +130,7 @@ class ViewServer:
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
         self._error: BaseException | None = None
+        self.cpu_s = 0.0
 
     @property
     def url(self) -> str:
@@ -167,6 +169,7 @@ class ViewServer:
         finally:
             loop.run_until_complete(runner.cleanup())
             loop.close()
+            self.cpu_s = time.thread_time()      # CPU this thread used (loop_bench --view)
 
     def stop(self, timeout: float = 5.0) -> None:
         loop, thread = self._loop, self._thread
