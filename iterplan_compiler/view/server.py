@@ -89,7 +89,7 @@ def make_app(hub: Hub, poll: float = 0.2) -> web.Application:
                 for m in deltas:
                     await ws.send_str(_dumps(m))
             reader.cancel()
-        except (ConnectionResetError, asyncio.CancelledError):
+        except ConnectionResetError:      # the page went away
             pass
         finally:
             sockets.discard(ws)

@@ -301,6 +301,12 @@ class Observer:
         """The sorter's first few of R, read without changing the iterator (the observer must
         not change what the executor computes, nor when): the sorted prefix when there is one,
         else the smallest sort keys (a copy; computed once per re-sort, O(|R|))."""
+        try:
+            return self._first_of(it)
+        except (AttributeError, IndexError, ValueError):   # another Iterator implementation
+            return []
+
+    def _first_of(self, it: Any) -> list[int]:
         head, sorted_to = it._head, it._sorted_to
         key = (id(it), it.resorts, head, sorted_to)
         if key == self._first_key:
@@ -326,11 +332,11 @@ class Observer:
         if key == self._path_key:
             return
         self._path_key = key
-        if pl.path is None or pl.arrived or not len(pl._px):
+        if pl.path is None or pl.arrived or not len(getattr(pl, "_px", ())):
             d["path"] = []
             d["target"] = None
             return
-        end = min(int(pl._end) + 1, len(pl._px))
+        end = min(int(getattr(pl, "_end", len(pl._px) - 1)) + 1, len(pl._px))
         idx = np.unique(np.linspace(0, end - 1, min(PATH_POINTS, end)).astype(int))
         la, lo = ex.grid.to_latlon(pl._px[idx], pl._py[idx])
         d["path"] = [[_r(a), _r(b)] for a, b in zip(np.atleast_1d(la), np.atleast_1d(lo),
