@@ -3,7 +3,8 @@ driven by Selenium watches ``iterc run --view`` fly the Fire Patrol example.
 
 Skips with a reason when selenium, the view's dependencies, chromium or chromedriver are
 missing (``.ci/run`` installs them).  Screenshots go to ``$ITERPLAN_ARTEFACTS`` (default
-``test-artefacts/`` in the repository): ``view-live.png`` mid-flight, ``view-final.png``.
+``test-artefacts/`` in the repository): ``view-live.png`` mid-flight, ``view-final.png``,
+``view-replay.png`` (``iterc view``).
 """
 
 from __future__ import annotations
@@ -137,4 +138,40 @@ def test_live_view_in_chromium(tmp_path):
             rc = proc.wait()
         proc.stdout.close()
         proc.stderr.close()
+    assert rc == 0
+
+
+def test_replay_in_chromium(tmp_path):
+    """``iterc view RUN_DIR``: the slider moves the page through the finished run."""
+    browser = _browser()
+    from iterplan_compiler.cli import main
+
+    ctl = tmp_path / "fire_patrol_ctl.py"
+    shutil.copy(ROOT / "tests" / "runtime" / "fire_patrol.py", ctl)
+    fire_map = str(ROOT / "examples" / "fire_patrol.json")
+    out = tmp_path / "out"
+    assert main(["run", str(ctl), "--map", fire_map, "--out", str(out), "--quiet", "--no-plot",
+                 "--ideal-compute"]) == 0
+    proc = subprocess.Popen([sys.executable, "-m", "iterplan_compiler", "view", str(out),
+                             "--map", fire_map, "--linger", "120"],
+                            stdout=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        url = proc.stdout.readline().split()[2]
+        browser.get(url)
+        text = lambda i: browser.find_element("id", i).text  # noqa: E731
+        _until(lambda: "mission completed" in text("status"), 60, "the replay's end state")
+        assert text("done-count") == "64" and text("visits").startswith("9 / 2")
+        browser.execute_script(
+            "var s = document.getElementById('slider'); s.value = 30;"
+            "s.dispatchEvent(new Event('input'));")
+        _until(lambda: text("status").startswith("replay at"), 30, "the slider's time")
+        assert 0 < int(text("done-count")) < 64
+        assert text("ctrl-state").startswith("state")
+        ARTEFACTS.mkdir(parents=True, exist_ok=True)
+        browser.save_screenshot(str(ARTEFACTS / "view-replay.png"))
+    finally:
+        browser.quit()
+        proc.terminate()
+        rc = proc.wait(30)
+        proc.stdout.close()
     assert rc == 0
