@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "dot": "export a process, composite or controller as Graphviz",
     "solve": "GR(1) realizability/strategy for a slugsin file",
     "run": "run a generated controller on the simulator or a MAVLink vehicle",
+    "view": "show a finished run (iterc run --out folder) in the mission view, with a time slider",
     "demo": "compile the bundled Fire Patrol example and fly it in the simulator",
     "conformance": "run the MTSA conformance corpus and print a report",
     "experiment": "reproduce the paper's Fig. 3 experiments",

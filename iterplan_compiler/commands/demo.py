@@ -27,6 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--passes", type=int, default=1,
                         help="full passes over the map before landing the demo (default 1)")
     parser.add_argument("--quiet", "-q", action="store_true", help="no per-event progress")
+    # -- live view (issue 16): --view, --realtime, --view-linger ---------------------------
+    from iterplan_compiler.view.cli import add_view_arguments
+    add_view_arguments(parser)
 
 
 def _say(msg: str) -> None:
@@ -56,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
 
     _say(f"[2/3] flying it on the built-in simulator (sorter: {args.sorter})")
     try:
-        result, grid = _fly(module, ex.map, args)
+        result, grid, view = _fly(module, ex.map, args)
     except StageError as exc:
         print(f"iterc demo: stopped: {exc}", file=sys.stderr)
         return 1
@@ -67,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
         _say(f"      {k:<24} {v}")
     files = write_outputs(out, result, grid, summary)
     _say("      wrote " + ", ".join(str(f) for f in files))
+    from iterplan_compiler.view import cli as view_cli  # live view (issue 16)
+    view_cli.finish(view, args, interrupted=result.reason == "interrupted")
     return 0 if summary["all patrol cells visited"] == "yes" else 1
 
 
@@ -99,11 +104,27 @@ def _fly(module: Path, map_name: str, args):
         where = grid.cell_name(e.cell) if e.cell >= 0 else ""
         _say(f"      t={e.t:7.1f}s  {e.label:<11} {where}")
 
-    result = fly(module, grid, sorter=args.sorter, seed=args.seed, stop=stop, on_event=show,
-                 map_data=map_data, max_time=3600.0)
+    # -- live view (issue 16) ---------------------------------------------------------------
+    from iterplan_compiler.view import cli as view_cli
+    from iterplan_compiler.view.live import ViewError
+    try:
+        view = view_cli.start(args, grid, title="iterc demo: Fire Patrol", open_browser=True)
+    except ViewError as exc:
+        raise StageError("view", str(exc)) from None
+    try:
+        result = fly(module, grid, sorter=args.sorter, seed=args.seed, stop=stop,
+                     on_event=show, map_data=map_data, max_time=3600.0,
+                     observe=view.observe if view else None,
+                     realtime=view_cli.realtime(args))
+    except BaseException:
+        if view is not None:
+            view.close()
+        raise
     if not result.ok:
+        if view is not None:
+            view.close()
         raise StageError("flight", f"the mission ended early: {result.reason}")
-    return result, grid
+    return result, grid, view
 
 
 def mission_summary(result, grid) -> dict:

@@ -104,6 +104,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="run-out", help="output directory")
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
     parser.add_argument("--quiet", action="store_true", help="no progress output")
+    # -- live view (issue 16): --view, --realtime, --view-linger ---------------------------
+    from iterplan_compiler.view.cli import add_view_arguments
+    add_view_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -162,6 +165,15 @@ def run(args: argparse.Namespace) -> int:
     if problem:
         return err(problem)
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    # -- live view (issue 16) ---------------------------------------------------------------
+    from iterplan_compiler.view import cli as view_cli
+    from iterplan_compiler.view.live import ViewError
+    try:
+        view = view_cli.start(args, grid, title=Path(args.controller).stem)
+    except ViewError as exc:
+        return err(str(exc))
+    result = None
+    # ----------------------------------------------------------------------------------------
 
     altitude = args.altitude if args.altitude is not None else grid.altitude
     wind_margin = args.wind_margin if args.wind_margin is not None else math.hypot(*wind)
@@ -189,7 +201,9 @@ def run(args: argparse.Namespace) -> int:
                             fast_skip=args.fast_skip,
                             on_event_labels=frozenset(
                                 a for a in table.controllable | table.uncontrollable
-                                if until and canon(a) == until[0]))
+                                if until and canon(a) == until[0]),
+                            observe=view.observe if view else None,   # live view (issue 16)
+                            realtime=view_cli.realtime(args))
             result = Executor(table, grid, vehicle, config=cfg).run()
         except KeyboardInterrupt:
             return err("interrupted before the mission started; nothing was commanded")
@@ -198,6 +212,8 @@ def run(args: argparse.Namespace) -> int:
         finally:
             if vehicle is not None:
                 vehicle.close()
+            if view is not None and result is None:    # live view (issue 16): no mission
+                view.close()
         write_outputs(result, out, vehicle, plot=not args.no_plot)
     s = result.summary
     print(f"{'mission completed' if result.ok else 'mission ended early: ' + result.reason}")
@@ -206,7 +222,8 @@ def run(args: argparse.Namespace) -> int:
           f"{s['overhead_pct'] if s['overhead_pct'] is not None else 'n/a'} %")
     print(f"  visited {s['arrivals']} cells, {s['photos']} photos, {s['steps']} controller steps, "
           f"compute {s['compute_s']:.3f} s; outputs in {out}")
-    print(f"  safe state: {s['safe_state']}")
+    print(f"  safe state: {s['safe_state']}", flush=True)
+    view_cli.finish(view, args, interrupted=result.reason == "interrupted")  # issue 16
     return 0 if result.ok else 1
 
 

@@ -74,12 +74,14 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
         map_data: dict | None = None, full_log: bool = False,
-        fast_skip: bool = False) -> FlightResult:
+        fast_skip: bool = False, observe: Callable | None = None,
+        realtime: float | None = None) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
     ``max_time`` simulated seconds).  ``fast_skip``: the executor's fast skip
     (``runtime/skip.py``), with ``has.next``/``y.next`` left out of the compact log so that
-    skip cycles can be skipped.  Raises :class:`StageError` if the runtime is missing or
-    the module cannot be loaded."""
+    skip cycles can be skipped.  ``observe``/``realtime`` go to the executor's RunConfig
+    (the live view, ``iterc demo --view``).  Raises :class:`StageError` if the runtime is
+    missing or the module cannot be loaded."""
     try:
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
         from iterplan_compiler.runtime.sim import SimVehicle
@@ -126,7 +128,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
                     compute_clock=time.process_time, on_event=on_controller_event,
                     fast_skip=fast_skip,
                     on_event_labels=(KEEP - {"has.next", "y.next"}) if fast_skip and not full_log
-                    else None)
+                    else None,
+                    observe=observe, realtime=realtime)
     try:
         # map_data=None: the rules load_map put on the grid (the executor applies them itself).
         bindings = None if map_data is None else example_bindings(grid, map_data)
