@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             if args.vehicle == "sim":
                 vehicle = _sim_vehicle(args, grid, params, wind, altitude)
-                mode = args.planner or "course"
+                mode = args.planner or ("carrot" if params else "course")  # calibrated: carrot
             else:
                 from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
                 link = LinkConfig(ready_timeout=args.ready_timeout, airspeed=args.airspeed,
