@@ -697,15 +697,42 @@ class Elaborator(ModelBackend):
             lts = self._hide_tails(lts, tails, env)
         return lts
 
-    def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic]) -> list[LTS] | None:
+    def _plain_composite(self, name: str) -> S.CompositeDecl | None:
+        """The declaration of ``name`` if it is a composite that is nothing but a parallel
+        composition (no operator keyword, no tail): its product is the product of its leaves,
+        so synthesis may take the leaves instead of the flattened machine."""
+        if name in self.processes or name not in self.composites:
+            return None
+        d = self.composites[name]
+        return None if d.keywords or d.tails else d
+
+    def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic], *,
+               leaves: bool = False) -> list[LTS] | None:
+        """The machines of a composite body.  With ``leaves``, references to plain composites
+        (:meth:`_plain_composite`) are expanded into their own machines instead of being
+        composed explicitly (synthesis composes them symbolically); prefixes distribute over
+        the product, a relabelling does not (it may merge labels), so a relabelled item is
+        built as one machine."""
         if isinstance(b, S.CRef):
             args = tuple(evaluate(a, env) for a in b.args)
+            d = self._plain_composite(b.name) if leaves else None
+            if d is not None:
+                if b.name in self.building:
+                    raise EvalError(error(
+                        "E0401", "recursive expression while parallel composing: "
+                        + " -> ".join([*self.building, b.name]), b.span))
+                self.building.append(b.name)
+                try:
+                    inner = self.env().with_params(self._params(d.params, args, d.name, b.span))
+                    return self._cbody(d.body, inner, diags, leaves=True)
+                finally:
+                    self.building.pop()
             lts = self.get(b.name, args, b.span, diags)
             return None if lts is None else [lts]
         if isinstance(b, S.CPar):
             out: list[LTS] = []
             for it in b.items:
-                sub = self._cbody(it, env, diags)
+                sub = self._cbody(it, env, diags, leaves=leaves)
                 if sub is None:
                     return None
                 out.extend(sub)
@@ -713,15 +740,15 @@ class Elaborator(ModelBackend):
         if isinstance(b, S.CForall):
             out = []
             for e2 in bind_all(b.binds, env):
-                sub = self._cbody(b.body, e2, diags)
+                sub = self._cbody(b.body, e2, diags, leaves=leaves)
                 if sub is None:
                     return None
                 out.extend(sub)
             return out
         if isinstance(b, S.CIf):
             if truth(evaluate(b.cond, env), b.span):
-                return self._cbody(b.then, env, diags)
-            return [] if b.other is None else self._cbody(b.other, env, diags)
+                return self._cbody(b.then, env, diags, leaves=leaves)
+            return [] if b.other is None else self._cbody(b.other, env, diags, leaves=leaves)
         # CItem: `p1:p2::...:prim / {relabels}`.  A prefix may bind variables (`[i:R]:P(i)`),
         # which scope over the rest of the item, so each non-sharing prefix value gives its own
         # environment; prefixes are applied innermost first, the relabelling last.
@@ -729,7 +756,8 @@ class Elaborator(ModelBackend):
 
         out = []
         for leaf_env, chain in self._prefix_chains(b.prefixes, env):
-            base = self._cbody(b.prim, leaf_env, diags)
+            base = self._cbody(b.prim, leaf_env, diags,
+                               leaves=leaves and b.relabels is None)
             if base is None:
                 return None
             machines = base
@@ -809,9 +837,18 @@ class Elaborator(ModelBackend):
             return None
         spec = self.specs[spec_name]
         env = self.env()
-        plant = self._cbody(d.body, env, diags)
-        if plant is None:
-            return None
+        # §3.2: the body's machines, plain sub-composites as their leaves (composed
+        # symbolically by synthesis); the first body item is MTSA's "environment" machine
+        items = d.body.items if isinstance(d.body, S.CPar) else (d.body,)
+        plant: list[LTS] = []
+        env_machines = 0
+        for k, item in enumerate(items):
+            part = self._cbody(item, env, diags, leaves=True)
+            if part is None:
+                return None
+            plant.extend(part)
+            if k == 0:
+                env_machines = len(part)
         safety: list[LTS] = []
         for n in spec.safety:
             lts = self.get(n, (), spec.span, diags)
@@ -842,7 +879,8 @@ class Elaborator(ModelBackend):
             safety=tuple(safety), assumptions=assumptions, guarantees=guarantees,
             failures=failures, fluents=tuple(self.fluents[u] for u in sorted(used)),
             controllable=spec.controllable, marking=spec.marking, nonblocking=spec.nonblocking,
-            spec_name=spec.name, span=d.span, permissive="permissive" in spec.flags)
+            spec_name=spec.name, span=d.span, permissive="permissive" in spec.flags,
+            env_machines=env_machines)
 
     def _controlled_det_problem(self, problem: SynthesisProblem, d: S.CompositeDecl,
                                 diags: list[Diagnostic]) -> SynthesisProblem | None:
@@ -876,7 +914,7 @@ class Elaborator(ModelBackend):
         if any(a == TAU for _, a, _ in plant.transitions):
             plant = eliminate_tau(plant)
         det = reachable(controlled_determinisation(plant, problem.controllable, problem.name))
-        return replace(problem, plant=(det,), safety=())
+        return replace(problem, plant=(det,), safety=(), env_machines=1)
 
     def _compatibility(self, d: S.CompositeDecl, env: Env, inst: str,
                        diags: list[Diagnostic]) -> LTS | None:

@@ -133,7 +133,7 @@ def synthesize(
         others: list[LTS] = []
     else:
         # §3.6: the controller replaces the environment among the composite's machines
-        others = list(problem.plant[1:]) + list(problem.safety)
+        others = list(problem.plant[problem.env_machines:]) + list(problem.safety)
     composition = _compose([controller, *others], name) if others else renamed(controller, name)
     stats["composition_states"] = composition.num_states
     stats["t_extract"] = stats.get("t_extract", 0.0) + time.perf_counter() - t1
