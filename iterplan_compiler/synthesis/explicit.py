@@ -74,25 +74,18 @@ class ProductMoves:
         self.start = tuple(c.initial for c in components)
 
     def moves(self, cur: tuple[int, ...]) -> list[tuple[str, tuple[int, ...] | None]]:
+        """Unsorted moves of ``cur``: only the actions its first owner enables are tried."""
         idx = self.idx
+        owners = self.owners
         out: list[tuple[str, tuple[int, ...] | None]] = []
-        for a in self.actions:
-            parts = self.owners[a]
-            choices = []
-            for k in parts:
-                ts = idx[k].get(cur[k], {}).get(a)
-                if not ts:
-                    break
-                choices.append(ts)
-            else:
-                for combo in _cartesian(*choices):
-                    if ERROR in combo:
-                        out.append((a, None))
-                        continue
-                    nxt = list(cur)
-                    for k, t in zip(parts, combo, strict=True):
-                        nxt[k] = t
-                    out.append((a, tuple(nxt)))
+        for k0 in range(self.n):
+            for a in idx[k0].get(cur[k0], ()):
+                if a == TAU:
+                    continue
+                parts = owners[a]
+                if parts[0] != k0:
+                    continue
+                self._sync(cur, a, parts, out)
         for k in range(self.n):
             for t in idx[k].get(cur[k], {}).get(TAU, ()):
                 if t == ERROR:
@@ -102,6 +95,24 @@ class ProductMoves:
                     nxt[k] = t
                     out.append((TAU, tuple(nxt)))
         return out
+
+    def _sync(self, cur: tuple[int, ...], a: str, parts: list[int],
+              out: list[tuple[str, tuple[int, ...] | None]]) -> None:
+        idx = self.idx
+        choices = []
+        for k in parts:
+            ts = idx[k].get(cur[k], {}).get(a)
+            if not ts:
+                return
+            choices.append(ts)
+        for combo in _cartesian(*choices):
+            if ERROR in combo:
+                out.append((a, None))
+                continue
+            nxt = list(cur)
+            for k, t in zip(parts, combo, strict=True):
+                nxt[k] = t
+            out.append((a, tuple(nxt)))
 
 
 def explore_product(

@@ -51,6 +51,8 @@ from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 ORDERS = ("action_first", "clustered", "action_last", "blocked")
 #: see :meth:`SymbolicGame._cluster`
 CLUSTER_MAX_NODES = 100_000
+#: components per cached partial cube in :meth:`SymbolicGame.state_cube`
+CUBE_BLOCK = 4
 Node = Any
 
 
@@ -86,7 +88,8 @@ class SymbolicGame:
         self._prime_f = {c: self.bdd.var(n) for c, n in self.prime.items()}
         self._unprime_f = {n: self.bdd.var(c) for c, n in self.prime.items()}
         self.reach: Any = None  # set by reachable()
-        self._value_cubes: list[dict[int, Node]] = [{} for _ in spec.components]
+        self._block_cubes: list[dict[tuple[int, ...], Node]] = [
+            {} for _ in range(0, len(spec.components), CUBE_BLOCK)]
         self._build()
 
     # -- variables ----------------------------------------------------------------------
@@ -317,13 +320,19 @@ class SymbolicGame:
         return tuple(v.decode(assignment) for v in vecs)
 
     def state_cube(self, tup: tuple[int, ...]) -> Node:
-        """The cube of one state: a conjunction of per-component value cubes (cached)."""
-        cubes = self._value_cubes
+        """The cube of one state: a conjunction of cached cubes of blocks of
+        :data:`CUBE_BLOCK` components (explored states share most blocks, so a cube costs a
+        few conjunctions instead of one per component)."""
         u = self.bdd.true
-        for k, val in enumerate(tup):
-            c = cubes[k].get(val)
+        for lo in range(0, len(tup), CUBE_BLOCK):
+            part = tup[lo:lo + CUBE_BLOCK]
+            cache = self._block_cubes[lo // CUBE_BLOCK]
+            c = cache.get(part)
             if c is None:
-                c = cubes[k][val] = self.cur[k].eq(self.bdd, val)
+                c = self.bdd.true
+                for k, val in enumerate(part, start=lo):
+                    c &= self.cur[k].eq(self.bdd, val)
+                cache[part] = c
             u &= c
         return u
 
