@@ -77,13 +77,20 @@ class _Oracle:
         self.g, self.W, self.layers = g, W, layers
         self._cube: dict[State, Node] = {}
         self._rank: dict[tuple[State, int], int] = {}
+        self._memo: dict[tuple[int, State], bool] = {}
 
     def has(self, u: Node, s: State) -> bool:
-        """``s ∈ u`` as ``cube(s) ≤ u`` (CUDD's ``bddLeq``: a walk, no node is built)."""
-        cube = self._cube.get(s)
-        if cube is None:
-            cube = self._cube[s] = self.g.state_cube(s)
-        return bool(cube <= u)
+        """``s ∈ u`` as ``cube(s) ≤ u``, memoised per (set, state): the sets queried are a
+        fixed handful (W, G_j, F, A_i, the layers), kept alive by the oracle, so ``id`` is a
+        stable key."""
+        key = (id(u), s)
+        r = self._memo.get(key)
+        if r is None:
+            cube = self._cube.get(s)
+            if cube is None:
+                cube = self._cube[s] = self.g.state_cube(s)
+            r = self._memo[key] = bool(cube <= u)
+        return r
 
     def below(self, j: int, k: int, s: State | None) -> bool:
         """``r_j(s) ≤ k`` (False for ``k < 0`` and for losing / ERROR states)."""
@@ -146,7 +153,7 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
         may_increase = in_g or orc.has(F, s)
         rs = orc.rank(j, s)
         rest_a = not orc.has(A[rs % m], s)
-        for a, t in sorted(set(pm.moves(s)), key=lambda x: (x[0], x[1] or ())):
+        for a, t in pm.moves(s):  # distinct, in a fixed order
             if a not in ctrl:
                 ok = True
             elif may_increase:
