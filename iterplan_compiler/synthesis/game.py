@@ -124,6 +124,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["t_reach"] = time.perf_counter() - t
     care = g.live if reach is None else reach
     if reach is not None:
+        g.restrict(reach)
+    if reach is not None:
         stats["game_states"] = g.count(reach & g.live) + (
             1 if (reach & g.error) != g.bdd.false else 0)
     else:

@@ -277,9 +277,18 @@ class SymbolicGame:
         return (self.env & ~env_bad) | (self.ctrl_owned & good)
 
     def restrict(self, care: Node) -> None:
-        """Kept for callers of the monolithic engine: with partitioned relations there is
-        nothing to restrict (a forward-closed ``care`` loses no edge; every operator result
-        is intersected with the fixpoint's current set anyway)."""
+        """Restrict the framed relations to ``care`` (e.g. the reachable states) at both
+        ends.
+
+        Only sound for a forward-closed ``care``: then no relevant edge is lost.  Measured on
+        GyroLTLVar3_702 (31 k reachable states, 68 k-node framed controllable relation): the
+        fixpoint took 60 s unrestricted and 8 s restricted — the relational products then
+        never touch unreachable junk.  Partitioned groups (which do not mention every
+        variable) stay as they are."""
+        cn = self.to_next(care)
+        for g in self.groups:
+            if len(g.owners) == len(self.cur):
+                g.rel = g.rel & care & cn
 
     def post(self, X: Node) -> Node:
         b = self.bdd
