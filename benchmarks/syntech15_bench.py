@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     folder = Path(args.folder)
     files = [(p, "realizable") for p in sorted(folder.glob("*.fsp"))]
     files += [(p, "unrealizable") for p in sorted((folder / "unrealizable").glob("*.fsp"))]
-    print(f"| file | expected | verdict | time (s) | peak BDD nodes | peak RSS (MB) |")
+    print("| file | expected | verdict | time (s) | peak BDD nodes | peak RSS (MB) |")
     print("|---|---|---|---|---|---|")
     ok = 0
     for path, expected in files:

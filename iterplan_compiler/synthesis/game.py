@@ -59,8 +59,8 @@ def subgame(g: SymbolicGame, region: Any, *, limit: int | None = None) -> Explic
     vals = [g.fluent_values(t) if t is not None else None for t in tuples]
 
     def sets(formulas: tuple) -> list[frozenset[int]]:
-        return [frozenset(s for s in range(n) if vals[s] is not None and inside[s]
-                          and evaluate(f, vals[s])) for f in formulas]
+        return [frozenset(s for s in range(n) if (v := vals[s]) is not None and inside[s]
+                          and evaluate(f, v)) for f in formulas]
 
     everything = frozenset(range(n))
     A = sets(spec.assumptions) or [everything]

@@ -146,7 +146,9 @@ class SymbolicGame:
         src = value_cubes(b, self.cur[k], codes)
         dst = value_cubes(b, self.nxt[k], codes)
         for s, a, t in c.transitions:
-            terms.setdefault(a, []).append(src[s] & dst[err if t == ERROR else t])
+            code = t if t != ERROR else err
+            assert code is not None  # an ERROR move means the component has an ERROR code
+            terms.setdefault(a, []).append(src[s] & dst[code])
         return {a: disjoin(b, ts) for a, ts in terms.items()}
 
     def _build(self) -> None:
@@ -158,8 +160,9 @@ class SymbolicGame:
         for k, c in enumerate(comps):
             valid &= self.cur[k].less_than(b, c.num_states + (1 if c.has_error else 0))
             init &= self.cur[k].eq(b, c.initial)
-            if self.err_code[k] is not None:
-                err |= self.cur[k].eq(b, self.err_code[k])
+            code = self.err_code[k]
+            if code is not None:
+                err |= self.cur[k].eq(b, code)
             rels.append(self._component_relation(k, c))
         self.valid, self.error, self.init = valid, err & valid, init
         self.live = valid & ~err
@@ -185,21 +188,21 @@ class SymbolicGame:
         b = self.bdd
         comps = self.spec.components
         ctrl = self.spec.controllable
-        owners: dict[str, list[int]] = {}
+        owner_lists: dict[str, list[int]] = {}
         for k, c in enumerate(comps):
             for a in sorted(c.alphabet - {TAU}):
-                owners.setdefault(a, []).append(k)
+                owner_lists.setdefault(a, []).append(k)
         parts: dict[tuple[tuple[int, ...], bool], list[tuple[str, Node]]] = {}
-        for a, ks in sorted(owners.items()):
+        for a, ks_list in sorted(owner_lists.items()):
             r = b.true
-            for k in ks:
+            for k in ks_list:
                 r &= rels[k].get(a, b.false)
                 if r == b.false:
                     break
-            parts.setdefault((tuple(ks), a in ctrl), []).append((a, r))
-        for k, rel in enumerate(rels):
-            if TAU in rel:
-                parts.setdefault(((k,), False), []).append((TAU, rel[TAU]))
+            parts.setdefault((tuple(ks_list), a in ctrl), []).append((a, r))
+        for k, comp_rel in enumerate(rels):
+            if TAU in comp_rel:
+                parts.setdefault(((k,), False), []).append((TAU, comp_rel[TAU]))
         out: list[Group] = []
         for (ks, is_ctrl), acts in parts.items():
             rel = disjoin(b, [r for _, r in acts])

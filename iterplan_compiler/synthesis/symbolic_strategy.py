@@ -137,8 +137,8 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
     n = len(G)
     ctrl = g.spec.controllable
     pm = ProductMoves(g.spec.components)
-    start = (pm.start, 0)
-    index = {start: 0}
+    start: tuple[State | None, int] = (pm.start, 0)
+    index: dict[tuple[State | None, int], int] = {start: 0}
     order = [start]
     trans: list[tuple[int, str, int]] = []
     extra: set[str] = set()
