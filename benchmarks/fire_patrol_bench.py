@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import subprocess
 import sys
 import tempfile
@@ -52,6 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     best = None
     n = args.start
+    cpu_before = 0.0
     while True:
         t = time.perf_counter()
         try:
@@ -62,7 +64,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"N={n}: over {args.limit:g} s")
             break
         dt = time.perf_counter() - t
-        print(f"N={n}: {dt:.1f} s, game {res['game_states']} states, controller "
+        ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = ru.ru_utime + ru.ru_stime - cpu_before
+        cpu_before += cpu
+        print(f"N={n}: {dt:.1f} s wall, {cpu:.1f} s CPU, game {res['game_states']} states, controller "
               f"{res['controller_states']} states (solve {res['t_solve']:.1f} s, extract "
               f"{res['t_extract']:.1f} s)", flush=True)
         if not res["realizable"] or dt > args.limit:
