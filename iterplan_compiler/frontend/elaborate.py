@@ -9,13 +9,12 @@ Codes: E0101 duplicate definition (with the first site), E0102 undefined process
 E0103 operator keywords out of order, E0401 recursive composition, E0402 state explosion,
 E0403 composite operator failed (e.g. ``property`` of a nondeterministic machine),
 E0501 fluent sets not disjoint, E0601 undefined name in a formula, E0602 recursive assert,
-E0701 undefined spec / name in a spec, E0900 needs a component that is not available,
+E0701 undefined spec / name in a spec,
 E0901 synthesis failed/unrealizable, W0151 ignored declaration.
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Mapping
 from dataclasses import replace
 from fractions import Fraction
@@ -42,6 +41,8 @@ from iterplan_compiler.frontend.processes import build_process
 from iterplan_compiler.ir import formulas as F
 from iterplan_compiler.ir.lts import LTS, TAU, make_lts, reachable, renamed
 from iterplan_compiler.ir.model import ControllerSpec, Model, ModelBackend, SynthesisProblem
+from iterplan_compiler.synthesis import driver as synthesis_driver
+from iterplan_compiler.synthesis.encode import prepare as prepare_game
 
 OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "property",
             "optimistic", "pessimistic", "component", "controller", "gr", "rtc", "rtcAnalysis",
@@ -529,13 +530,9 @@ class Elaborator(ModelBackend):
             if name in self.formula_errors:
                 diags.append(self.formula_errors[name])
             return None
-        try:
-            mod = importlib.import_module("iterplan_compiler.fltl.safety")
-            safety_lts = mod.safety_lts
-        except (ImportError, AttributeError):
-            diags.append(error("E0900", f"{nf.kind} {name} needs the FLTL safety translation "
-                               "(iterplan_compiler.fltl.safety), which is not available", span))
-            return None
+        # a plain import (fltl pulls networkx in; most specs never need it)
+        from iterplan_compiler.fltl.safety import safety_lts
+
         lts, ds = safety_lts(nf, self.fluents, constraint=nf.kind == "constraint")
         diags.extend(ds)
         return None if lts is None else renamed(lts, name)
@@ -604,13 +601,7 @@ class Elaborator(ModelBackend):
         machines = [*problem.plant, *problem.safety]
         if "plant" in d.keywords:
             try:
-                encode = importlib.import_module("iterplan_compiler.synthesis.encode")
-                machines = list(encode.prepare(problem).components)
-            except ImportError:
-                diags.append(error("E0900", f"composite {d.name} needs the synthesis encoder "
-                                   "(iterplan_compiler.synthesis.encode), which is not "
-                                   "available", d.span))
-                return None
+                machines = list(prepare_game(problem).components)
             except Exception as e:  # SynthesisError: an unsupported goal
                 diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
                 return None
@@ -925,12 +916,7 @@ class Elaborator(ModelBackend):
         if problem is None:
             return None
         try:
-            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
-            compatible, message = driver.check_compatibility(problem)
-        except ImportError:
-            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
-                               "available in this build", d.span))
-            return None
+            compatible, message = synthesis_driver.check_compatibility(problem)
         except Exception as e:  # SynthesisError (e.g. a temporal goal) or a synthesis bug
             diags.append(error("E0901", f"compatibility check of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
@@ -976,14 +962,7 @@ class Elaborator(ModelBackend):
             return None
         self.problems[inst] = problem
         try:
-            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
-            synthesize = driver.synthesize
-        except (ImportError, AttributeError):
-            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
-                               "available in this build", d.span))
-            return None
-        try:
-            result = synthesize(problem)
+            result = synthesis_driver.synthesize(problem)
         except Exception as e:  # a synthesis bug must not look like a front-end crash
             diags.append(error("E0901", f"synthesis of {d.name} failed: {e}", d.span))
             return None
