@@ -9,13 +9,12 @@ Codes: E0101 duplicate definition (with the first site), E0102 undefined process
 E0103 operator keywords out of order, E0401 recursive composition, E0402 state explosion,
 E0403 composite operator failed (e.g. ``property`` of a nondeterministic machine),
 E0501 fluent sets not disjoint, E0601 undefined name in a formula, E0602 recursive assert,
-E0701 undefined spec / name in a spec, E0900 needs a component that is not available,
+E0701 undefined spec / name in a spec,
 E0901 synthesis failed/unrealizable, W0151 ignored declaration.
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Mapping
 from dataclasses import replace
 from fractions import Fraction
@@ -42,6 +41,8 @@ from iterplan_compiler.frontend.processes import build_process
 from iterplan_compiler.ir import formulas as F
 from iterplan_compiler.ir.lts import LTS, TAU, make_lts, reachable, renamed
 from iterplan_compiler.ir.model import ControllerSpec, Model, ModelBackend, SynthesisProblem
+from iterplan_compiler.synthesis import driver as synthesis_driver
+from iterplan_compiler.synthesis.encode import prepare as prepare_game
 
 OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "property",
             "optimistic", "pessimistic", "component", "controller", "gr", "rtc", "rtcAnalysis",
@@ -70,10 +71,8 @@ def _max_states() -> int:
 def _synthesis_errors() -> tuple[type[BaseException], ...]:
     """The exceptions of the synthesis stage that are about the *input* (a diagnostic, exit 1);
     every other exception is a compiler bug and must reach the CLI's exit 3 handler."""
-    try:
-        encode = importlib.import_module("iterplan_compiler.synthesis.encode")
-    except ImportError:
-        return ()
+    from iterplan_compiler.synthesis import encode
+
     return (encode.SynthesisError, encode.PreconditionFailure)
 
 
@@ -575,13 +574,9 @@ class Elaborator(ModelBackend):
             if name in self.formula_errors:
                 diags.append(self.formula_errors[name])
             return None
-        try:
-            mod = importlib.import_module("iterplan_compiler.fltl.safety")
-            safety_lts = mod.safety_lts
-        except (ImportError, AttributeError):
-            diags.append(error("E0900", f"{nf.kind} {name} needs the FLTL safety translation "
-                               "(iterplan_compiler.fltl.safety), which is not available", span))
-            return None
+        # a plain import (fltl pulls networkx in; most specs never need it)
+        from iterplan_compiler.fltl.safety import safety_lts
+
         lts, ds = safety_lts(nf, self.fluents, constraint=nf.kind == "constraint")
         diags.extend(ds)
         return None if lts is None else renamed(lts, name)
@@ -650,13 +645,7 @@ class Elaborator(ModelBackend):
         machines = [*problem.plant, *problem.safety]
         if "plant" in d.keywords:
             try:
-                encode = importlib.import_module("iterplan_compiler.synthesis.encode")
-                machines = list(encode.prepare(problem).components)
-            except ImportError:
-                diags.append(error("E0900", f"composite {d.name} needs the synthesis encoder "
-                                   "(iterplan_compiler.synthesis.encode), which is not "
-                                   "available", d.span))
-                return None
+                machines = list(prepare_game(problem).components)
             except _synthesis_errors() as e:
                 # an unsupported goal; any other exception is a bug and propagates (exit 3)
                 diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
@@ -744,15 +733,42 @@ class Elaborator(ModelBackend):
             lts = self._hide_tails(lts, tails, env)
         return lts
 
-    def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic]) -> list[LTS] | None:
+    def _plain_composite(self, name: str) -> S.CompositeDecl | None:
+        """The declaration of ``name`` if it is a composite that is nothing but a parallel
+        composition (no operator keyword, no tail): its product is the product of its leaves,
+        so synthesis may take the leaves instead of the flattened machine."""
+        if name in self.processes or name not in self.composites:
+            return None
+        d = self.composites[name]
+        return None if d.keywords or d.tails else d
+
+    def _cbody(self, b: S.CBody, env: Env, diags: list[Diagnostic], *,
+               leaves: bool = False) -> list[LTS] | None:
+        """The machines of a composite body.  With ``leaves``, references to plain composites
+        (:meth:`_plain_composite`) are expanded into their own machines instead of being
+        composed explicitly (synthesis composes them symbolically); prefixes distribute over
+        the product, a relabelling does not (it may merge labels), so a relabelled item is
+        built as one machine."""
         if isinstance(b, S.CRef):
             args = tuple(evaluate(a, env) for a in b.args)
+            d = self._plain_composite(b.name) if leaves else None
+            if d is not None:
+                if b.name in self.building:
+                    raise EvalError(error(
+                        "E0401", "recursive expression while parallel composing: "
+                        + " -> ".join([*self.building, b.name]), b.span))
+                self.building.append(b.name)
+                try:
+                    inner = self.env().with_params(self._params(d.params, args, d.name, b.span))
+                    return self._cbody(d.body, inner, diags, leaves=True)
+                finally:
+                    self.building.pop()
             lts = self.get(b.name, args, b.span, diags)
             return None if lts is None else [lts]
         if isinstance(b, S.CPar):
             out: list[LTS] = []
             for it in b.items:
-                sub = self._cbody(it, env, diags)
+                sub = self._cbody(it, env, diags, leaves=leaves)
                 if sub is None:
                     return None
                 out.extend(sub)
@@ -760,15 +776,15 @@ class Elaborator(ModelBackend):
         if isinstance(b, S.CForall):
             out = []
             for e2 in bind_all(b.binds, env):
-                sub = self._cbody(b.body, e2, diags)
+                sub = self._cbody(b.body, e2, diags, leaves=leaves)
                 if sub is None:
                     return None
                 out.extend(sub)
             return out
         if isinstance(b, S.CIf):
             if truth(evaluate(b.cond, env), b.span):
-                return self._cbody(b.then, env, diags)
-            return [] if b.other is None else self._cbody(b.other, env, diags)
+                return self._cbody(b.then, env, diags, leaves=leaves)
+            return [] if b.other is None else self._cbody(b.other, env, diags, leaves=leaves)
         # CItem: `p1:p2::...:prim / {relabels}`.  A prefix may bind variables (`[i:R]:P(i)`),
         # which scope over the rest of the item, so each non-sharing prefix value gives its own
         # environment; prefixes are applied innermost first, the relabelling last.
@@ -776,7 +792,8 @@ class Elaborator(ModelBackend):
 
         out = []
         for leaf_env, chain in self._prefix_chains(b.prefixes, env):
-            base = self._cbody(b.prim, leaf_env, diags)
+            base = self._cbody(b.prim, leaf_env, diags,
+                               leaves=leaves and b.relabels is None)
             if base is None:
                 return None
             machines = base
@@ -856,9 +873,18 @@ class Elaborator(ModelBackend):
             return None
         spec = self.specs[spec_name]
         env = self.env()
-        plant = self._cbody(d.body, env, diags)
-        if plant is None:
-            return None
+        # §3.2: the body's machines, plain sub-composites as their leaves (composed
+        # symbolically by synthesis); the first body item is MTSA's "environment" machine
+        items = d.body.items if isinstance(d.body, S.CPar) else (d.body,)
+        plant: list[LTS] = []
+        env_machines = 0
+        for k, item in enumerate(items):
+            part = self._cbody(item, env, diags, leaves=True)
+            if part is None:
+                return None
+            plant.extend(part)
+            if k == 0:
+                env_machines = len(part)
         safety: list[LTS] = []
         for n in spec.safety:
             lts = self.get(n, (), spec.span, diags)
@@ -889,7 +915,8 @@ class Elaborator(ModelBackend):
             safety=tuple(safety), assumptions=assumptions, guarantees=guarantees,
             failures=failures, fluents=tuple(self.fluents[u] for u in sorted(used)),
             controllable=spec.controllable, marking=spec.marking, nonblocking=spec.nonblocking,
-            spec_name=spec.name, span=d.span, permissive="permissive" in spec.flags)
+            spec_name=spec.name, span=d.span, permissive="permissive" in spec.flags,
+            env_machines=env_machines)
 
     def _controlled_det_problem(self, problem: SynthesisProblem, d: S.CompositeDecl,
                                 diags: list[Diagnostic]) -> SynthesisProblem | None:
@@ -923,7 +950,7 @@ class Elaborator(ModelBackend):
         if any(a == TAU for _, a, _ in plant.transitions):
             plant = eliminate_tau(plant)
         det = reachable(controlled_determinisation(plant, problem.controllable, problem.name))
-        return replace(problem, plant=(det,), safety=())
+        return replace(problem, plant=(det,), safety=(), env_machines=1)
 
     def _compatibility(self, d: S.CompositeDecl, env: Env, inst: str,
                        diags: list[Diagnostic]) -> LTS | None:
@@ -934,12 +961,7 @@ class Elaborator(ModelBackend):
         if problem is None:
             return None
         try:
-            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
-            compatible, message = driver.check_compatibility(problem)
-        except ImportError:
-            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
-                               "available in this build", d.span))
-            return None
+            compatible, message = synthesis_driver.check_compatibility(problem)
         except _synthesis_errors() as e:  # e.g. a temporal goal; a bug propagates (exit 3)
             diags.append(error("E0901", f"compatibility check of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
@@ -985,17 +1007,10 @@ class Elaborator(ModelBackend):
             return None
         self.problems[inst] = problem
         try:
-            driver = importlib.import_module("iterplan_compiler.synthesis.driver")
-            synthesize = driver.synthesize
-        except (ImportError, AttributeError):
-            diags.append(error("E0900", f"composite {d.name} needs synthesis, which is not "
-                               "available in this build", d.span))
-            return None
-        from iterplan_compiler import limits
+            from iterplan_compiler import limits
 
-        limits.progress(f"synthesising {d.name}", 0)
-        try:
-            result = synthesize(problem)
+            limits.progress(f"synthesising {d.name}", 0)
+            result = synthesis_driver.synthesize(problem)
         except _synthesis_errors() as e:  # synthesize reports these itself; a bug propagates
             diags.append(error("E0901", f"synthesis of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))

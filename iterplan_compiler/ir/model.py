@@ -68,6 +68,10 @@ class SynthesisProblem:
     span: Span = field(default=NO_SPAN, compare=False)
     #: the spec's ``permissive`` flag (§3.6: also keep winning, not rank-improving moves)
     permissive: bool = False
+    #: how many leading ``plant`` machines make up the body's first item (MTSA's
+    #: "environment", which the controller replaces when re-composing, §3.6): a plain
+    #: sub-composite is passed as its leaves, not flattened
+    env_machines: int = 1
 
 
 class ModelBackend:

@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from iterplan_compiler.diagnostics import Diagnostic, error
+from iterplan_compiler.ir.compose import compose
 from iterplan_compiler.ir.lts import LTS, renamed
+from iterplan_compiler.ir.minimise import strong_minimise
 from iterplan_compiler.ir.model import SynthesisProblem
 from iterplan_compiler.synthesis import explicit as _explicit
 from iterplan_compiler.synthesis.encode import (
@@ -53,18 +55,10 @@ class SynthesisResult:
 
 
 def _compose(components: list[LTS], name: str) -> LTS:
-    try:
-        from iterplan_compiler.ir.compose import compose
-    except ImportError:  # pragma: no cover - compose.py is part of the tree
-        return _explicit.compose_explicit(components, name)
     return compose(components, name)
 
 
 def _minimise(lts: LTS) -> LTS:
-    try:
-        from iterplan_compiler.ir.minimise import strong_minimise
-    except ImportError:  # pragma: no cover
-        return lts
     return strong_minimise(lts, lts.name)
 
 
@@ -133,7 +127,7 @@ def synthesize(
         others: list[LTS] = []
     else:
         # §3.6: the controller replaces the environment among the composite's machines
-        others = list(problem.plant[1:]) + list(problem.safety)
+        others = list(problem.plant[problem.env_machines:]) + list(problem.safety)
     composition = _compose([controller, *others], name) if others else renamed(controller, name)
     stats["composition_states"] = composition.num_states
     stats["t_extract"] = stats.get("t_extract", 0.0) + time.perf_counter() - t1

@@ -55,6 +55,66 @@ def _component_index(c: LTS) -> dict[int, dict[str, list[int]]]:
     return out
 
 
+class ProductMoves:
+    """The moves of a synchronous product (§2.5) from one component-state tuple, computed from
+    the components' own transition lists — no product is built.  ``moves(cur)`` lists
+    ``(label, next tuple)`` with ``None`` for a move into ERROR."""
+
+    def __init__(self, components: Sequence[LTS]) -> None:
+        self.idx = [_component_index(c) for c in components]
+        alphabet: set[str] = set()
+        self.owners: dict[str, list[int]] = {}
+        for k, c in enumerate(components):
+            alphabet |= c.alphabet
+            for a in c.alphabet:
+                self.owners.setdefault(a, []).append(k)
+        self.alphabet = frozenset(alphabet)
+        self.actions = sorted(alphabet)
+        self.n = len(components)
+        self.start = tuple(c.initial for c in components)
+
+    def moves(self, cur: tuple[int, ...]) -> list[tuple[str, tuple[int, ...] | None]]:
+        """Unsorted moves of ``cur``: only the actions its first owner enables are tried."""
+        idx = self.idx
+        owners = self.owners
+        out: list[tuple[str, tuple[int, ...] | None]] = []
+        for k0 in range(self.n):
+            for a in idx[k0].get(cur[k0], ()):
+                if a == TAU:
+                    continue
+                parts = owners[a]
+                if parts[0] != k0:
+                    continue
+                self._sync(cur, a, parts, out)
+        for k in range(self.n):
+            for t in idx[k].get(cur[k], {}).get(TAU, ()):
+                if t == ERROR:
+                    out.append((TAU, None))
+                else:
+                    nxt = list(cur)
+                    nxt[k] = t
+                    out.append((TAU, tuple(nxt)))
+        return out
+
+    def _sync(self, cur: tuple[int, ...], a: str, parts: list[int],
+              out: list[tuple[str, tuple[int, ...] | None]]) -> None:
+        idx = self.idx
+        choices = []
+        for k in parts:
+            ts = idx[k].get(cur[k], {}).get(a)
+            if not ts:
+                return
+            choices.append(ts)
+        for combo in _cartesian(*choices):
+            if ERROR in combo:
+                out.append((a, None))
+                continue
+            nxt = list(cur)
+            for k, t in zip(parts, combo, strict=True):
+                nxt[k] = t
+            out.append((a, tuple(nxt)))
+
+
 def explore_product(
     components: Sequence[LTS], *, max_states: int | None = None,
     expand: Callable[[tuple[int, ...]], bool] | None = None,
@@ -65,17 +125,9 @@ def explore_product(
     With ``expand``, only tuples for which it is True are expanded (the others get an index
     but no edges) — used to explore just the winning part of a game.
     """
-    idx = [_component_index(c) for c in components]
-    alphabet: set[str] = set()
-    owners: dict[str, list[int]] = {}
-    for k, c in enumerate(components):
-        alphabet |= c.alphabet
-        for a in c.alphabet:
-            owners.setdefault(a, []).append(k)
-    actions = sorted(alphabet)
-    start = tuple(c.initial for c in components)
-    tuples = [start]
-    index = {start: 0}
+    pm = ProductMoves(components)
+    tuples = [pm.start]
+    index = {pm.start: 0}
     edges: list[list[tuple[str, int]]] = []
     i = 0
     while i < len(tuples):
@@ -85,33 +137,7 @@ def explore_product(
         if expand is not None and not expand(cur):
             edges.append(out)
             continue
-        moves: list[tuple[str, tuple[int, ...] | None]] = []
-        for a in actions:
-            parts = owners[a]
-            choices = []
-            for k in parts:
-                ts = idx[k].get(cur[k], {}).get(a)
-                if not ts:
-                    break
-                choices.append(ts)
-            else:
-                for combo in _cartesian(*choices):
-                    if ERROR in combo:
-                        moves.append((a, None))
-                        continue
-                    nxt = list(cur)
-                    for k, t in zip(parts, combo, strict=True):
-                        nxt[k] = t
-                    moves.append((a, tuple(nxt)))
-        for k in range(len(components)):
-            for t in idx[k].get(cur[k], {}).get(TAU, ()):
-                if t == ERROR:
-                    moves.append((TAU, None))
-                else:
-                    nxt = list(cur)
-                    nxt[k] = t
-                    moves.append((TAU, tuple(nxt)))
-        for a, tgt in moves:
+        for a, tgt in pm.moves(cur):
             if tgt is None:
                 out.append((a, ERROR))
                 continue
@@ -124,7 +150,7 @@ def explore_product(
                 tuples.append(tgt)
             out.append((a, j))
         edges.append(sorted(set(out)))
-    return tuples, edges, frozenset(alphabet)
+    return tuples, edges, pm.alphabet
 
 
 def compose_explicit(components: Sequence[LTS], name: str, *,

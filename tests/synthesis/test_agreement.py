@@ -149,3 +149,28 @@ def test_explanations_never_fail(prob):
     if game.initial not in win:
         text = explain_losing(spec, game, win)  # must not raise
         assert text.startswith("unrealizable")
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_symbolic_rank_layers_are_mtsa_ranks(prob):
+    """The symbolic rank layers (symbolic_strategy.rank_layers) give exactly the least rank
+    function of the explicit solver on every winning reachable state, for every guarantee."""
+    from iterplan_compiler.synthesis.explicit import solve_ranks
+    from iterplan_compiler.synthesis.symbolic_strategy import _Oracle, rank_layers
+
+    spec = prepare(prob)
+    game = build_game(spec)
+    ranks = solve_ranks(game)
+    g = SymbolicGame(spec)
+    reach = g.reachable()
+    goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
+    W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach & g.live).winning & reach
+    A = g.assumptions or [g.live]
+    layers = [rank_layers(g, W, gj, A) for gj in goals] if W != g.bdd.false else []
+    orc = _Oracle(g, W, layers)
+    for s, tup in enumerate(game.tuples):
+        if tup is None or not ranks.winning(s):
+            continue
+        for j in range(len(goals)):
+            assert orc.rank(j, tup) == ranks.rank[j][s], (s, j)
