@@ -151,7 +151,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         grid = load_map(args.map)
     except MapError as exc:
-        return err(f"{args.map}: {exc}")
+        msg = str(exc)
+        return err(msg if msg.startswith(str(args.map)) else f"{args.map}: {msg}")
     if until is not None:
         labels = {canon(a) for a in table.controllable | table.uncontrollable}
         if until[0] not in labels:

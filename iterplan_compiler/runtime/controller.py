@@ -158,21 +158,40 @@ def load_controller(path: str | Path) -> ControllerTable:
     sys.modules[name] = mod
     try:
         spec.loader.exec_module(mod)
-    except Exception as exc:  # a broken module is the user's input, not our bug
+    except (Exception, SystemExit) as exc:  # a broken module is the user's input, not our bug
         raise ValueError(f"cannot import {path}: {type(exc).__name__}: {exc}") from None
     for attr in ("TABLE", "CONTROLLER"):
         obj = getattr(mod, attr, None)
         if isinstance(obj, ControllerTable):
-            return obj
+            return checked(obj, path)
         if isinstance(obj, Controller):
-            return obj.table
+            return checked(obj.table, path)
     mk = getattr(mod, "make_controller", None)
     if callable(mk):
         c = mk()
         if isinstance(c, Controller):
-            return c.table
+            return checked(c.table, path)
     tables = [v for v in vars(mod).values() if isinstance(v, ControllerTable)]
     if len(tables) == 1:
-        return tables[0]
+        return checked(tables[0], path)
     raise ValueError(f"{path} defines no controller: expected a module-level TABLE "
                      f"(ControllerTable), CONTROLLER or make_controller()")
+
+
+def checked(table: ControllerTable, path: str | Path) -> ControllerTable:
+    """``table`` if it is a well-formed automaton (initial state and every target defined,
+    every label in exactly one alphabet), else ``ValueError`` naming the first problem."""
+    states = set(table.delta)
+    if table.initial not in states:
+        raise ValueError(f"{path}: the controller's initial state {table.initial} has no entry")
+    both = table.controllable & table.uncontrollable
+    if both:
+        raise ValueError(f"{path}: {sorted(both)[0]!r} is both controllable and uncontrollable")
+    for s, moves in table.delta.items():
+        for label, t in moves.items():
+            if t not in states:
+                raise ValueError(f"{path}: state {s} --{label}--> {t}, a state the controller "
+                                 f"does not define")
+            if label not in table.controllable and label not in table.uncontrollable:
+                raise ValueError(f"{path}: label {label!r} of state {s} is in neither alphabet")
+    return table

@@ -53,3 +53,21 @@ def test_run_bad_inputs(tmp_path, capsys):
     nofire.write_text(json.dumps({"cols": 3, "rows": 3, "sensors": {"inP": ["A1"]}}))
     assert main(["run", str(ctl), "--map", str(nofire), "--out", str(tmp_path / "o")]) == 1
     assert "sensor 'fire'" in capsys.readouterr().err
+
+
+def test_run_rejects_broken_controller_modules(tmp_path, capsys):
+    """A module that calls sys.exit(0) or whose table points at a missing state is bad
+    input (exit 1 with the reason), never a silent exit 0 or a crash mid-mission."""
+    ctl, m = setup_files(tmp_path)
+    exits = tmp_path / "exits.py"
+    exits.write_text("import sys\nsys.exit(0)\n")
+    assert main(["run", str(exits), "--map", str(m), "--out", str(tmp_path / "o")]) == 1
+    assert "cannot import" in capsys.readouterr().err
+    bad = tmp_path / "bad.py"
+    bad.write_text("from iterplan_compiler.runtime.controller import ControllerTable\n"
+                   "TABLE = ControllerTable('bad', 2, 0, {0: {'has.next': 5}, 1: {}},\n"
+                   "    frozenset({'has.next'}), frozenset({'y.next', 'n.next'}))\n")
+    assert main(["run", str(bad), "--map", str(m), "--out", str(tmp_path / "o")]) == 1
+    assert "a state the controller does not define" in capsys.readouterr().err
+    assert main(["run", str(ctl), "--map", str(m), "--until", "nope"]) == 2
+    assert "no event of that name" in capsys.readouterr().err
