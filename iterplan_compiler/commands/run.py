@@ -16,26 +16,15 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from iterplan_compiler.runtime.runfiles import positive_float, sigterm_as_interrupt
 
 HELP = "run a generated controller on the simulator or a MAVLink vehicle"
 
 SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
-
-
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v) or v <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
-    return v
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,22 +53,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run the controller's skip cycles (has.next ... remove.next over "
                              "static next-location sensors) for many locations at once; the "
                              "events and everything the controller observes stay the same")
-    parser.add_argument("--max-time", type=_positive, default=4 * 3600.0, metavar="S",
+    parser.add_argument("--max-time", type=positive_float, default=4 * 3600.0, metavar="S",
                         help="end the run after S seconds of mission time or of wall time, "
                              "whichever comes first (default 4 h)")
     parser.add_argument("--planner", choices=("course", "carrot"), default=None,
                         help="path following: course hold or fly-to carrots "
                              "(default: course on sim, carrot on mavlink)")
-    parser.add_argument("--airspeed", type=_positive, default=None, metavar="M/S",
+    parser.add_argument("--airspeed", type=positive_float, default=None, metavar="M/S",
                         help="cruise airspeed: the simulator's; on MAVLink commanded with "
                              "DO_CHANGE_SPEED (default: the vehicle's AIRSPEED_CRUISE)")
-    parser.add_argument("--turn-radius", type=_positive, default=None, metavar="M",
+    parser.add_argument("--turn-radius", type=positive_float, default=None, metavar="M",
                         help="planning turn radius of the motion planner and the Sorter "
                              "(default: 1.4 x the turn at 45 deg bank at cruise speed)")
-    parser.add_argument("--loiter-radius", type=_positive, default=None, metavar="M",
+    parser.add_argument("--loiter-radius", type=positive_float, default=None, metavar="M",
                         help="radius of loiter circles, e.g. the end-of-mission loiter "
                              "(default: the vehicle's WP_LOITER_RAD; 80 on the simulator)")
-    parser.add_argument("--altitude", type=_positive, default=None, metavar="M",
+    parser.add_argument("--altitude", type=positive_float, default=None, metavar="M",
                         help="flight altitude above home (default: the map's)")
     parser.add_argument("--param", action="append", default=[], metavar="FILE",
                         help="ArduPilot parameter file(s) for the simulator: calibrate it to "
@@ -94,7 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "telemetry lost, a refused command, controller or planner error, "
                              "time limit); default rtl.  After a pilot/failsafe mode change, a "
                              "disarm or link loss nothing is commanded")
-    parser.add_argument("--ready-timeout", type=_positive, default=180.0, metavar="S",
+    parser.add_argument("--ready-timeout", type=positive_float, default=180.0, metavar="S",
                         help="MAVLink: wall seconds to wait for GPS fix, home and pre-arm checks")
     parser.add_argument("--wind", default=None, metavar="E,N",
                         help="sim wind vector east,north in m/s")
@@ -179,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     altitude = args.altitude if args.altitude is not None else grid.altitude
     wind_margin = args.wind_margin if args.wind_margin is not None else math.hypot(*wind)
     vehicle: Any = None
-    with _sigterm_as_interrupt():
+    with sigterm_as_interrupt():
         try:
             if args.vehicle == "sim":
                 vehicle = _sim_vehicle(args, grid, params, wind, altitude)
@@ -240,21 +229,5 @@ def _sim_vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
     sp = SimParams.from_arduplane(params, altitude=altitude, **kw) if params \
         else SimParams(**kw)  # type: ignore[arg-type]
     return SimVehicle(sp, home=grid.home, heading=grid.arrival_heading)
-
-
-@contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM ends a mission like Ctrl-C (safe state, outputs) instead of killing it."""
-    def handler(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt(f"signal {signum}")
-    try:
-        old: Any = signal.signal(signal.SIGTERM, handler)
-    except ValueError:          # not the main thread (an embedding application)
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
 
 

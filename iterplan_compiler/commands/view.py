@@ -59,10 +59,10 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         return err(f"cannot serve on {host}:{port}: {exc.strerror or exc}")
     print(f"replay view: {server.url}  (Ctrl-C to stop)", flush=True)
-    from iterplan_compiler.view.cli import _sigterm_ends_linger
+    from iterplan_compiler.runtime.runfiles import sigterm_as_interrupt
     from iterplan_compiler.view.live import wait
     try:
-        with _sigterm_ends_linger():
+        with sigterm_as_interrupt():
             wait(args.linger)
     finally:
         server.stop()

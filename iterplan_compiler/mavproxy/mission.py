@@ -11,7 +11,6 @@ loop stays responsive, and writes the same outputs (``track.csv``, ``events.csv`
 from __future__ import annotations
 
 import argparse
-import math
 import threading
 import time
 import traceback
@@ -21,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from iterplan_compiler.mavproxy.link import ModuleLink
+from iterplan_compiler.runtime.runfiles import positive_float
 
 SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
 
@@ -40,16 +40,6 @@ class _Parser(argparse.ArgumentParser):
 
     def print_help(self, file: Any = None) -> None:
         raise UsageError(self.format_help().rstrip())
-
-
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v) or v <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
-    return v
 
 
 def run_parser() -> argparse.ArgumentParser:
@@ -75,14 +65,14 @@ def run_parser() -> argparse.ArgumentParser:
                         "or 0 with --until)")
     p.add_argument("--sorter", choices=("distance", "last", "random"), default="distance")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--max-time", type=_positive, default=4 * 3600.0, metavar="S")
+    p.add_argument("--max-time", type=positive_float, default=4 * 3600.0, metavar="S")
     p.add_argument("--planner", choices=("course", "carrot"), default="carrot")
-    p.add_argument("--airspeed", type=_positive, default=None, metavar="M/S")
-    p.add_argument("--turn-radius", type=_positive, default=None, metavar="M")
-    p.add_argument("--loiter-radius", type=_positive, default=None, metavar="M")
-    p.add_argument("--altitude", type=_positive, default=None, metavar="M")
+    p.add_argument("--airspeed", type=positive_float, default=None, metavar="M/S")
+    p.add_argument("--turn-radius", type=positive_float, default=None, metavar="M")
+    p.add_argument("--loiter-radius", type=positive_float, default=None, metavar="M")
+    p.add_argument("--altitude", type=positive_float, default=None, metavar="M")
     p.add_argument("--wind-margin", type=float, default=0.0, metavar="M/S")
-    p.add_argument("--ready-timeout", type=_positive, default=180.0, metavar="S")
+    p.add_argument("--ready-timeout", type=positive_float, default=180.0, metavar="S")
     p.add_argument("--plot", action="store_true", help="also write track.png (matplotlib)")
     return p
 

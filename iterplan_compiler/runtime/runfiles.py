@@ -4,8 +4,10 @@ the ``--until LABEL[:K]`` end condition."""
 
 from __future__ import annotations
 
+import argparse
 import csv
 import io
+import math
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -74,6 +76,34 @@ def _interrupts_deferred() -> Iterator[None]:
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0 (speeds, radii, times)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v) or v <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    return v
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM raises KeyboardInterrupt (like Ctrl-C) inside the block: a mission then ends in
+    its safe state with its outputs instead of being killed."""
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt(f"signal {signum}")
+    try:
+        old: Any = signal.signal(signal.SIGTERM, handler)
+    except ValueError:          # not the main thread (an embedding application)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 def parse_until(text: str) -> tuple[str, int] | None:

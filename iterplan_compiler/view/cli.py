@@ -6,11 +6,10 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Any
+
+from iterplan_compiler.runtime.runfiles import sigterm_as_interrupt
 
 VIEW_HELP = ("serve a live view of the mission at HOST:PORT (default 127.0.0.1 and a free "
              "port, printed at start).  Binding to another address (e.g. 0.0.0.0) shows the "
@@ -85,22 +84,9 @@ def finish(view: Any, args: argparse.Namespace, interrupted: bool = False) -> No
                    else f"for {args.view_linger:g} s")
             print(f"live view: final state served at {view.url} {how}", file=sys.stderr,
                   flush=True)
-            with _sigterm_ends_linger():
+            with sigterm_as_interrupt():
                 view.linger(args.view_linger)
     finally:
         view.close()
 
 
-@contextmanager
-def _sigterm_ends_linger() -> Iterator[None]:
-    def handler(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-    try:
-        old: Any = signal.signal(signal.SIGTERM, handler)
-    except ValueError:          # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
