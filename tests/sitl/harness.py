@@ -38,14 +38,15 @@ def isolated() -> bool:
     return names == ["lo"]
 
 
-def run_scenario(tmp: Path, **spec: Any) -> dict:
+def run_scenario(tmp: Path, module: str = "tests.sitl.scenario", **spec: Any) -> dict:
+    """Run scenario ``module`` (``python -m MODULE SPEC.json``) with ``spec``; its JSON result."""
     sitl = sitl_dir()
     assert sitl is not None
     tmp.mkdir(parents=True, exist_ok=True)
     spec = {"sitl": str(sitl), "workdir": str(tmp), "speedup": SPEEDUP, **spec}
     path = tmp / "scenario.json"
     path.write_text(json.dumps(spec))
-    cmd = [sys.executable, "-m", "tests.sitl.scenario", str(path)]
+    cmd = [sys.executable, "-m", module, str(path)]
     if not isolated():
         cmd = [str(sitl / "in-netns"), *cmd]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

@@ -18,7 +18,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
 import threading
@@ -26,55 +25,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from tests.sitl.scenario import outputs, start_sitl, stop
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def start_sitl(sitl: Path, instance: int, workdir: Path, speedup: float) -> int:
-    out = subprocess.run([str(sitl / "start-sitl"), "--speedup", str(speedup), "--instance",
-                          str(instance), "--workdir", str(workdir)],
-                         capture_output=True, text=True, timeout=30)
-    if out.returncode != 0:
-        raise RuntimeError(f"start-sitl failed: {out.stderr.strip()}")
-    return int(out.stdout.strip())
-
-
-def stop_pid(pid: int) -> None:
-    for sig in (signal.SIGTERM, signal.SIGKILL):
-        try:
-            os.kill(pid, sig)
-        except ProcessLookupError:
-            return
-        time.sleep(0.3)
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except (OSError, ValueError):
-        return []
-
-
-def _is_arduplane(pid: int) -> bool:
-    try:
-        return b"arduplane" in Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return False
-
-
-def stop_sitl(holder: int) -> None:
-    """Stop start-sitl's holder and the SITL it started.  SITL does not always exit when its
-    holder dies (orphans that ignore SIGTERM were seen), so its own process is killed too."""
-    sitl = [c for c in _children(holder) if _is_arduplane(c)]
-    stop_pid(holder)
-    for pid in sitl:
-        end = time.monotonic() + 2.0
-        while _is_arduplane(pid) and time.monotonic() < end:
-            time.sleep(0.1)
-        if _is_arduplane(pid):
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
 
 
 class Console:
@@ -130,16 +83,6 @@ class Console:
         return "\n".join(f"[{t:7.2f}] {s}" for t, s in self.lines)
 
 
-def outputs(out: Path) -> dict:
-    res: dict[str, Any] = {}
-    if (out / "summary.json").exists():
-        res["summary"] = json.loads((out / "summary.json").read_text())
-    for name in ("events.csv", "commands.csv", "track.csv"):
-        f = out / name
-        res[name] = f.read_text() if f.exists() else None
-    return res
-
-
 END = r"iterplan: (mission completed|mission ended early|error:)"
 
 
@@ -151,7 +94,7 @@ def main(spec_path: str) -> int:
     out = work / "out"
     result: dict[str, Any] = {"spec": spec}
     t_start = time.monotonic()
-    pid = start_sitl(sitl, inst, work / "sitl", float(spec.get("speedup", 10)))
+    pid = start_sitl(sitl, inst, work / "sitl", float(spec.get("speedup", 10)), [])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
     cmd = [sys.executable, "-m", "MAVProxy.mavproxy", "--master",
@@ -209,7 +152,7 @@ def main(spec_path: str) -> int:
     finally:
         if con.proc.poll() is None:
             con.proc.kill()
-        stop_sitl(pid)
+        stop(pid, work / "sitl")
     result["console"] = con.text()
     result.update(outputs(out))
     result["wall_s"] = round(time.monotonic() - t_start, 1)

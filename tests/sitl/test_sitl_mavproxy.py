@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -20,13 +19,12 @@ import pytest
 
 from iterplan_compiler.runtime.grid import load_map
 from tests.examples.behaviour import check_fire_patrol
-from tests.sitl.harness import ROOT, isolated, log_events, sitl_dir
+from tests.sitl.harness import ROOT, log_events, run_scenario
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("MAVProxy") is None,
                                 reason="MAVProxy is not installed (pip install MAVProxy, or "
                                        "pip install -e '.[mavproxy]')")
 
-SPEEDUP = float(os.environ.get("ITERPLAN_SITL_SPEEDUP", "10"))
 MAP = str(ROOT / "examples" / "fire_patrol.json")
 
 
@@ -40,25 +38,8 @@ def controller(tmp_path_factory):
 
 
 def run_mavproxy(tmp: Path, **spec) -> dict:
-    sitl = sitl_dir()
-    assert sitl is not None
-    tmp.mkdir(parents=True, exist_ok=True)
-    spec = {"sitl": str(sitl), "workdir": str(tmp), "speedup": SPEEDUP, "instance": 3,
-            "map": MAP, **spec}
-    path = tmp / "scenario.json"
-    path.write_text(json.dumps(spec))
-    cmd = [sys.executable, "-m", "tests.sitl.mavproxy_scenario", str(path)]
-    if not isolated():
-        cmd = [str(sitl / "in-netns"), *cmd]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    out = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env,
-                         timeout=spec.get("wall", 240) + 120)
-    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
-    if out.returncode != 0 or not lines:
-        raise AssertionError(f"scenario failed (exit {out.returncode}):\n{out.stderr[-4000:]}")
-    res = json.loads(lines[-1])
-    (tmp / "result.json").write_text(json.dumps(res, indent=1))
-    return res
+    return run_scenario(tmp, module="tests.sitl.mavproxy_scenario",
+                        **{"instance": 3, "map": MAP, **spec})
 
 
 def describe(res: dict) -> str:
