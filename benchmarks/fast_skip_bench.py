@@ -12,32 +12,18 @@ mission, without and with ``fast_skip``.
 from __future__ import annotations
 
 import argparse
-import math
 import statistics
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from benchmarks.loop_bench import patrol_grid  # noqa: E402
 from iterplan_compiler.runtime.executor import Executor, RunConfig  # noqa: E402
 from iterplan_compiler.runtime.grid import GridMap  # noqa: E402
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle  # noqa: E402
 from tests.runtime.fire_patrol import TABLE  # noqa: E402
-
-
-def grid(n: int) -> GridMap:
-    side = int(math.ceil(math.sqrt(n)))
-    g = GridMap.from_size(side, int(math.ceil(n / side)))
-    g.cells = g.cells[:n]
-    rng = np.random.default_rng(0)
-    block = (np.arange(20)[:, None] * g.cols + np.arange(20)[None, :]).ravel()
-    g.set_sensor("inP", rng.choice(block[block < n], 5, replace=False))
-    g.set_sensor("fire", g.sensors["inP"][:2])
-    g.home = g.centre(int(g.cells[0]))
-    return g
 
 
 def mission(g: GridMap, *, fast: bool, ideal: bool) -> tuple[float, float, int]:
@@ -55,7 +41,7 @@ def main() -> None:
     ap.add_argument("--locations", type=int, default=700_000)
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
-    g = grid(args.locations)
+    g = patrol_grid(args.locations)
     _, ideal_t, _ = mission(g, fast=False, ideal=True)
     print(f"{args.locations:,} locations; ideal-compute mission {ideal_t:.1f} s")
     for fast in (False, True):

@@ -63,16 +63,22 @@ def bare_loop(n: int) -> tuple[float, int]:
     return time.perf_counter() - t, steps
 
 
-def full_executor(n: int, ideal: bool, observe=None) -> tuple[float, dict]:
+def patrol_grid(n: int) -> GridMap:
+    """N locations with five patrol cells within ~1 km of home (two of them on fire), so legs
+    are short and iteration dominates (also used by fast_skip_bench.py)."""
     side = int(math.ceil(math.sqrt(n)))
     g = GridMap.from_size(side, int(math.ceil(n / side)))
     g.cells = g.cells[:n]
     rng = np.random.default_rng(0)
-    # Five patrol cells within ~1 km of home, so legs are short and iteration dominates.
     block = (np.arange(20)[:, None] * g.cols + np.arange(20)[None, :]).ravel()
     g.set_sensor("inP", rng.choice(block[block < n], 5, replace=False))
     g.set_sensor("fire", g.sensors["inP"][:2])
     g.home = g.centre(int(g.cells[0]))
+    return g
+
+
+def full_executor(n: int, ideal: bool, observe=None) -> tuple[float, dict]:
+    g = patrol_grid(n)
     v = SimVehicle(SimParams(), home=g.home)
     cfg = RunConfig(ideal_compute=ideal, log_limit=0, track_every=5.0, max_time=1e9,
                     observe=observe)

@@ -43,6 +43,11 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+# The SITL kit plumbing is the SITL test suite's (one place for finding and starting SITL).
+from tests.sitl.harness import isolated, sitl_dir  # noqa: E402
+from tests.sitl.scenario import start_sitl  # noqa: E402
 
 EXAMPLES = {
     # name: extra `iterc run` arguments that make the mission end
@@ -62,20 +67,6 @@ AIRCRAFT = {
     "slow": {"AIRSPEED_CRUISE": 17, "WP_LOITER_RAD": 60},
 }
 TOLERANCE = 0.10
-
-
-def sitl_dir() -> Path | None:
-    env = os.environ.get("ITERPLAN_SITL_DIR")
-    d = Path(env) if env else ROOT.parent / "shared" / "sitl"
-    return d if (d / "arduplane").exists() and (d / "start-sitl").exists() else None
-
-
-def isolated() -> bool:
-    """True inside a network namespace whose only interface is loopback."""
-    try:
-        return os.listdir("/sys/class/net") == ["lo"]
-    except OSError:
-        return False
 
 
 def iterc(*args: str, timeout: float | None = None) -> subprocess.CompletedProcess:
@@ -171,20 +162,6 @@ def fly_sim(work: Path, sitl: Path, name: str, ac: str, k: int, planner: str | N
 
 
 # -- SITL ---------------------------------------------------------------------------------------
-def start_sitl(sitl: Path, instance: int, workdir: Path, speedup: float,
-               params: list[str], home: str | None = None) -> int:
-    cmd = [str(sitl / "start-sitl"), "--speedup", str(speedup), "--instance", str(instance),
-           "--workdir", str(workdir)]
-    if home:
-        cmd += ["--home", home]
-    for p in params:
-        cmd += ["--param", p]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=30)
-    if out.returncode != 0:
-        raise RuntimeError(f"start-sitl failed: {out.stderr.strip()}")
-    return int(out.stdout.strip())
-
-
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)

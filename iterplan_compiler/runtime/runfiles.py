@@ -80,12 +80,22 @@ def _interrupts_deferred() -> Iterator[None]:
 
 def positive_float(text: str) -> float:
     """argparse type: a finite number > 0 (speeds, radii, times)."""
+    return _finite(text, 0.0, strict=True)
+
+
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite number >= 0 (factors, seconds where 0 means "none")."""
+    return _finite(text, 0.0, strict=False)
+
+
+def _finite(text: str, low: float, strict: bool) -> float:
     try:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v) or v <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    if not math.isfinite(v) or v < low or (strict and v == low):
+        raise argparse.ArgumentTypeError(
+            f"must be a {'positive' if strict else 'non-negative'} number, not {text}")
     return v
 
 

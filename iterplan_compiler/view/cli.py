@@ -4,12 +4,11 @@
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 from typing import Any
 
-from iterplan_compiler.runtime.runfiles import sigterm_as_interrupt
+from iterplan_compiler.runtime.runfiles import non_negative_float, sigterm_as_interrupt
 
 VIEW_HELP = ("serve a live view of the mission at HOST:PORT (default 127.0.0.1 and a free "
              "port, printed at start).  Binding to another address (e.g. 0.0.0.0) shows the "
@@ -17,26 +16,16 @@ VIEW_HELP = ("serve a live view of the mission at HOST:PORT (default 127.0.0.1 a
              "authentication and no encryption.  Needs pip install 'iterplan[view]'")
 
 
-def _factor(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v) or v < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, not {text}")
-    return v
-
-
 def add_view_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("live view")
     g.add_argument("--view", nargs="?", const="127.0.0.1:0", default=None, metavar="HOST:PORT",
                    help=VIEW_HELP)
-    g.add_argument("--realtime", nargs="?", const=1.0, type=_factor, default=None,
+    g.add_argument("--realtime", nargs="?", const=1.0, type=non_negative_float, default=None,
                    metavar="FACTOR",
                    help="pace the built-in simulator at FACTOR simulated seconds per wall "
                         "second (default 1 with --view, else as fast as possible; 0: as fast "
                         "as possible)")
-    g.add_argument("--view-linger", type=_factor, default=None, metavar="S",
+    g.add_argument("--view-linger", type=non_negative_float, default=None, metavar="S",
                    help="with --view: after the mission, keep serving the final state for S "
                         "seconds (default: until Ctrl-C)")
 

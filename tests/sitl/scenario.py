@@ -102,9 +102,12 @@ class Observer:
 
 
 def start_sitl(sitl: Path, instance: int, workdir: Path, speedup: float,
-               params: list[str]) -> int:
+               params: list[str], home: str | None = None) -> int:
+    """``start-sitl`` (optionally at ``home`` = "LAT,LON,ALT,HDG"); the holder's PID."""
     cmd = [str(sitl / "start-sitl"), "--speedup", str(speedup), "--instance", str(instance),
            "--workdir", str(workdir)]
+    if home:
+        cmd += ["--home", home]
     for p in params:
         cmd += ["--param", p]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=30)

@@ -210,7 +210,7 @@ def test_run_view_errors(tmp_path, capsys, monkeypatch):
     assert "HOST:PORT" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main([*base, "--realtime", "-1"])
-    assert "must be >= 0" in capsys.readouterr().err
+    assert "--realtime: must be a non-negative number, not -1" in capsys.readouterr().err
     import iterplan_compiler.view.live as live
     monkeypatch.setattr(live, "missing_dependency", lambda: "needs pip install 'iterplan[view]'")
     assert main([*base, "--view"]) == 1
