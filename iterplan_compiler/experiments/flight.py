@@ -75,12 +75,16 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
         map_data: dict | None = None, full_log: bool = False,
         fast_skip: bool = False, observe: Callable | None = None,
-        realtime: float | None = None) -> FlightResult:
+        realtime: float | None = None, heading: float | None = None,
+        params: object | None = None, arrival: tuple[object, object] | None = None
+        ) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
     ``max_time`` simulated seconds).  ``fast_skip``: the executor's fast skip
     (``runtime/skip.py``), with ``has.next``/``y.next`` left out of the compact log so that
     skip cycles can be skipped.  ``observe``/``realtime`` go to the executor's RunConfig
-    (the live view, ``iterc demo --view``).  Raises :class:`StageError` if the runtime is
+    (the live view, ``iterc demo --view``).  ``heading``: the launch heading (default the
+    map's arrival heading); ``params``: the simulator's :class:`SimParams` (default the
+    paper's UAV); ``arrival``: (``ArrivalHeadings``, ``HeadingChoice``) for the planner.  Raises :class:`StageError` if the runtime is
     missing or the module cannot be loaded."""
     try:
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
@@ -119,7 +123,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
             on_event(ev)
         return bool(stop is not None and stop(ev))
 
-    vehicle = SimVehicle(home=grid.home, heading=grid.arrival_heading)
+    vehicle = SimVehicle(params, home=grid.home,  # type: ignore[arg-type]
+                         heading=grid.arrival_heading if heading is None else heading)
     # compute_clock: charge CPU time of this process, not wall time, so the think-time charge
     # does not depend on how busy the machine is (sweeps run missions in parallel processes).
     cfg = RunConfig(sorter=sorter, seed=seed, ideal_compute=not compute_time, passes=0,
@@ -130,6 +135,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
                     on_event_labels=(KEEP - {"has.next", "y.next"}) if fast_skip and not full_log
                     else None,
                     observe=observe, realtime=realtime)
+    if arrival is not None:
+        cfg.headings, cfg.heading_choice = arrival  # type: ignore[assignment]
     try:
         # map_data=None: the rules load_map put on the grid (the executor applies them itself).
         bindings = None if map_data is None else example_bindings(grid, map_data)

@@ -14,13 +14,14 @@ The runtime's compute-time accounting is on: time the plan spends iterating is f
 
 from __future__ import annotations
 
+import enum
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from iterplan_compiler.experiments.stats import ideal_cover, ideal_patrol_loop
-from iterplan_compiler.experiments.sweeps import Case, case_map_data
+from iterplan_compiler.experiments.sweeps import Case, case_map_data, layout
 
 EXAMPLE_OF = {"fig3b": "ordered_patrol", "fig3c": "cover", "fig3d": "cover"}
 
@@ -127,12 +128,42 @@ def preflight(experiment: str, ctrl_dir: Path) -> str | None:
     return None
 
 
+class VehicleKind(enum.Enum):
+    """The simulated aircraft of the sweeps."""
+
+    #: the SITL-calibrated simulator (``SimParams.from_arduplane``, docs/sitl-calibration.md)
+    #: with the paper's 17 m/s cruise: SITL's plane.parm + AIRSPEED_CRUISE 17, WP_LOITER_RAD 60
+    SITL = "sitl"
+    PAPER = "paper"     # the plain kinematic model at 18.2 m/s TAS, 45 deg bank
+
+
+LOOKAHEAD = True
+SITL_SLOW_PARAMS = {"AIRSPEED_CRUISE": 17.0, "WP_LOITER_RAD": 60.0}
+
+
+def sim_params(kind: VehicleKind):
+    from iterplan_compiler.runtime.sim import SimParams
+
+    return SimParams.from_arduplane(SITL_SLOW_PARAMS) if kind is VehicleKind.SITL else SimParams()
+
+
+def arrival_for(sorter: str):
+    """The planner's heading options per sorter: the paper's for its three sorters; ``tour``
+    flies its planned order with the look-ahead heading choice (issue #15's "order" lever)."""
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
+
+    choice = HeadingChoice.LOOKAHEAD if sorter == "tour" and LOOKAHEAD else HeadingChoice.SHORTEST
+    return ArrivalHeadings.PARALLEL, choice
+
+
 class Runner:
     """Picklable case runner for :func:`harness.run_cases` (imports lazily in the worker)."""
 
-    def __init__(self, ctrl_dir: str, fast_skip: bool = False):
+    def __init__(self, ctrl_dir: str, fast_skip: bool = False,
+                 vehicle: VehicleKind = VehicleKind.SITL):
         self.ctrl_dir = ctrl_dir
         self.fast_skip = fast_skip
+        self.vehicle = vehicle
 
     def __call__(self, case: Case) -> dict:
         from iterplan_compiler.experiments import flight
@@ -144,10 +175,13 @@ class Runner:
         # visited.p.0 events; the cover time starts at the first has.next, a skipped event.
         res = flight.fly(module, grid, sorter=case.sorter, seed=case.seed,
                          stop=StopWhen(case, grid),
-                         fast_skip=self.fast_skip and case.experiment == "fig3b")
+                         fast_skip=self.fast_skip and case.experiment == "fig3b",
+                         heading=layout(case).heading, params=sim_params(self.vehicle),
+                         arrival=arrival_for(case.sorter))
         if not res.ok:
             raise MeasurementError(f"mission ended early: {res.reason}")
         out = measure(case, res.log, grid, res.speed)
         out["compute_s"] = float(res.summary.get("compute_s", 0.0) or 0.0)
         out["steps"] = int(res.summary.get("steps", 0) or 0)
+        out["turn_radius"] = float(res.summary.get("turn_radius_m", 0.0) or 0.0)
         return out

@@ -2,7 +2,8 @@
 
 Fig. 3's note: "The error bars are three times the estimated standard error of the mean ...
 Ideal duration is calculated using the minimum flight distance needed for the mission using
-constant speed, ignoring the UAV's movement restrictions."
+constant speed, ignoring the UAV's movement restrictions."  That distance is defined and
+computed once, in :mod:`iterplan_compiler.runtime.ideal` (shared with ``iterc run``).
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+
+from iterplan_compiler.runtime.ideal import ideal_path
 
 
 @dataclass(frozen=True)
@@ -52,17 +55,12 @@ def overhead(duration: float, ideal: float) -> float:
 def tour_length(points: Sequence[tuple[float, float]], closed: bool = True) -> float:
     """Length of the polygonal path through ``points`` in order (back to the first if
     ``closed``), in the points' unit."""
-    if len(points) < 2:
-        return 0.0
-    legs = list(zip(points[:-1], points[1:], strict=True))
-    if closed:
-        legs.append((points[-1], points[0]))
-    return math.fsum(math.dist(a, b) for a, b in legs)
+    return ideal_path(points, ordered=True, closed=closed).distance if points else 0.0
 
 
 def ideal_patrol_loop(points: Sequence[tuple[float, float]], speed: float) -> float:
     """Ideal duration (s) of one Ordered-Patrol loop: the closed tour through the patrol
-    locations in their order, flown in straight lines at constant ``speed`` (m/s)."""
+    locations in their (prescribed) order, straight legs at constant ``speed`` (m/s)."""
     if speed <= 0:
         raise ValueError("speed must be positive")
     return tour_length(points, closed=True) / speed
@@ -70,16 +68,12 @@ def ideal_patrol_loop(points: Sequence[tuple[float, float]], speed: float) -> fl
 
 def ideal_cover(start: tuple[float, float], cells: Sequence[tuple[float, float]],
                 cell_size: float, speed: float) -> float:
-    """Ideal duration (s) to cover ``cells`` (ENU centres, metres) from ``start``.
-
-    Minimum flight distance ignoring turn limits: reach the nearest cell in a straight line,
-    then every further cell costs at least one cell side (centres of distinct grid cells are at
-    least ``cell_size`` apart).  For a region that admits a boustrophedon path from that cell
-    (e.g. a strip or a rectangle entered at a corner) this lower bound is attained.
-    """
+    """Ideal duration (s) to cover ``cells`` (ENU centres, metres) from ``start``: the
+    runtime's one definition (:func:`iterplan_compiler.runtime.ideal.ideal_path`, the shortest
+    open path through the cells at constant ``speed``, no turn limits), as ``iterc run``
+    reports it.  ``cell_size`` is kept for the callers; the path needs none."""
     if speed <= 0 or cell_size <= 0:
         raise ValueError("speed and cell_size must be positive")
     if not cells:
         return 0.0
-    reach = min(math.dist(start, c) for c in cells)
-    return (reach + (len(cells) - 1) * cell_size) / speed
+    return ideal_path(cells, start).distance / speed

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-SORTERS: tuple[str, ...] = ("distance", "last", "random")
+SORTERS: tuple[str, ...] = ("distance", "last", "random", "tour")
 EXPERIMENTS: tuple[str, ...] = ("fig3b", "fig3c", "fig3d")
 
 #: Patrol locations of Fig. 3(b) as (col, row) cells, near the launch cell (0, 0), visited in
@@ -109,6 +109,58 @@ def region_cells(count: int, offset: tuple[int, int] = COVER_OFFSET) -> list[tup
     return [(offset[0] + i % side, offset[1] + i // side) for i in range(count)]
 
 
+#: The launch cell of every seed lies in this many columns/rows at the SW corner.
+HOME_BOX = 3
+#: Cover regions are placed with their SW corner this many cells from the home box at most.
+REGION_SPREAD = 8
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What a seed varies (as the paper's runs do): the region's SW corner (Cover), the launch
+    cell and the launch heading (math radians); the random sorter's order varies with the seed
+    too (``RunConfig.seed``)."""
+
+    offset: tuple[int, int]
+    home: tuple[int, int]
+    heading: float
+
+
+def layout(case: Case) -> Layout:
+    """The seed's layout: deterministic in (experiment, universe, count, seed), the same for
+    every sorter so that sorters are compared on the same missions."""
+    import numpy as np
+
+    exp_id = EXPERIMENTS.index(case.experiment) if case.experiment in EXPERIMENTS else 9
+    rng = np.random.default_rng([case.seed, case.universe, case.count, exp_id])
+    cols, rows = grid_shape(case.universe)
+    full_rows = case.universe // cols            # rows with every column a location
+    home = (int(rng.integers(0, min(HOME_BOX, cols))), int(rng.integers(0, min(HOME_BOX,
+                                                                               full_rows))))
+    heading = float(rng.uniform(0.0, 2 * math.pi))
+    offset = COVER_OFFSET
+    if case.experiment != "fig3b":
+        side = math.ceil(math.sqrt(case.count))
+        height = math.ceil(case.count / side)
+        lo = HOME_BOX + 1
+        hi_c = min(cols - side, lo + REGION_SPREAD)
+        hi_r = min(full_rows - height, lo + REGION_SPREAD)
+        if hi_c >= lo and hi_r >= lo:
+            offset = (int(rng.integers(lo, hi_c + 1)), int(rng.integers(lo, hi_r + 1)))
+        else:
+            offset = (max(0, min(lo, cols - side)), max(0, min(lo, full_rows - height)))
+    return Layout(offset, home, heading)
+
+
+def cell_name(col: int, row: int) -> str:
+    """The map schema's cell name (``A1`` = column 0, row 0)."""
+    letters, c = "", col + 1
+    while c:
+        c, rem = divmod(c - 1, 26)
+        letters = chr(65 + rem) + letters
+    return f"{letters}{row + 1}"
+
+
 def check_case(case: Case) -> None:
     """Raise ValueError if the case's special cells do not fit in its universe."""
     cols, rows = grid_shape(case.universe)
@@ -117,7 +169,7 @@ def check_case(case: Case) -> None:
         if case.count > len(PATROL_CELLS):
             raise ValueError(f"at most {len(PATROL_CELLS)} patrol locations are placed")
     else:
-        special = region_cells(case.count)
+        special = region_cells(case.count, layout(case).offset)
     for col, row in special:
         if col >= cols or row * cols + col >= case.universe:
             raise ValueError(f"{case}: cell ({col}, {row}) is outside a {case.universe}-location "
@@ -128,12 +180,13 @@ def case_map_data(case: Case) -> dict:
     """The case's map in the runtime's map schema (``runtime.grid.load_map(data=...)``), plus
     ``"cells"``: the number of leading cell ids (row-major) that are locations."""
     cols, rows = grid_shape(case.universe)
+    lay = layout(case)
     data: dict = {
         "name": f"{case.experiment}-{case.universe}-{case.count}",
         "cell_size": 50,
         "cols": cols,
         "rows": rows,
-        "home": {"cell": "A1"},
+        "home": {"cell": cell_name(*lay.home)},
         "arrival_heading": 0,
         "sensors": {},
     }
@@ -141,5 +194,5 @@ def case_map_data(case: Case) -> dict:
         for i, (c, r) in enumerate(PATROL_CELLS[: case.count]):
             data["sensors"][f"p.{i}"] = [[c, r]]
     else:
-        data["sensors"]["cover"] = [[c, r] for c, r in region_cells(case.count)]
+        data["sensors"]["cover"] = [[c, r] for c, r in region_cells(case.count, lay.offset)]
     return data

@@ -40,6 +40,9 @@ from __future__ import annotations
 __all__ = ["Executor", "LogEntry", "MissionContext", "MissionEnd", "MissionResult", "RunConfig",
            "ideal_distance", "load_controller"]
 
+# RunConfig, MissionContext, MissionEnd: runtime/mission.py; the summary: runtime/summary.py;
+# the fast skip: runtime/skip.py (re-exported here, the executor's public API)
+
 import math
 import time
 from collections import deque
@@ -64,14 +67,13 @@ from iterplan_compiler.runtime.controller import (  # load_controller: re-export
 )
 from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.iterator import Iterator
-from iterplan_compiler.runtime.planner import MotionPlanner
-from iterplan_compiler.runtime.results import (  # re-exported
-    LogEntry,
-    MissionResult,
-    ideal_distance,
-)
-from iterplan_compiler.runtime.skip import Cycle, cycle, static_sensors
+from iterplan_compiler.runtime.planner import MotionPlanner, admissible_headings
+from iterplan_compiler.runtime.ideal import ideal_distance  # re-exported
+from iterplan_compiler.runtime.mission import MissionContext, MissionEnd, RunConfig
+from iterplan_compiler.runtime.results import LogEntry, MissionResult  # re-exported
+from iterplan_compiler.runtime.skip import Cycle, fast_skip, static_sensors
 from iterplan_compiler.runtime.sorter import Pose, make_sorter
+from iterplan_compiler.runtime.summary import mission_summary
 from iterplan_compiler.runtime.vehicle import (
     FAULTS,
     SafeAction,
@@ -80,115 +82,6 @@ from iterplan_compiler.runtime.vehicle import (
     VehicleError,
     planning_radius,
 )
-
-
-@dataclass
-class RunConfig:
-    """Mission options (CLI flags of ``iterc run`` map 1:1 onto these)."""
-
-    sorter: str = "distance"
-    seed: int = 0
-    ideal_compute: bool = False
-    passes: int = 1                 # stop after this many complete iterator passes; 0 = never
-    max_time: float = 4 * 3600.0    # mission seconds
-    max_wall: float | None = None   # wall seconds (a frozen vehicle clock cannot hang a run)
-    start: Start = Start.AUTO
-    tick: float = 0.25              # physical time step while waiting (s)
-    altitude: float | None = None   # default: the map's altitude
-    turn_radius: float | None = None   # planning radius; default 1.4 x the vehicle's minimum
-    #: expected wind speed (m/s): the default planning radius grows to what the aircraft can fly
-    #: over ground downwind, 1.4 x r_min x ((V + wind) / V)^2
-    wind: float = 0.0
-    parallel: bool = True           # arrive parallel to the fixed direction (either way)
-    planner_mode: str = "course"
-    lead: float | None = None
-    accept: float | None = None
-    end_action: SafeAction = SafeAction.LOITER   # commanded when the mission completes or
-    fault_action: SafeAction = SafeAction.RTL    # is interrupted / when it ends on a fault
-    log_limit: int = 200_000
-    livelock_limit: int = 100_000   # steps without waiting or iterator progress
-    progress: Callable[[str], None] | None = None
-    progress_every: float = 300.0   # mission seconds between progress lines
-    track_every: float = 1.0        # mission seconds between track points
-    choose: Callable[[Sequence[str]], str] | None = None
-    auto_takeoff: bool = True       # take off before starting when the controller has no takeoff
-    #: clock for think time (wall by default; ``time.process_time`` makes charges independent
-    #: of machine load when several missions share the CPUs)
-    compute_clock: Callable[[], float] = time.perf_counter
-    #: called for every controller event as ``on_event(kind, label)`` with kind "c"
-    #: (controllable) or "u" (uncontrollable); returning True ends the mission successfully
-    on_event: Callable[[str, str], bool | None] | None = None
-    #: called after every physical tick as ``observe(executor, final=False)`` and once at the
-    #: end with ``final=True`` (a live view takes snapshots here; keep it cheap)
-    observe: Callable[[Executor, bool], None] | None = None
-    #: pace a simulated vehicle at this many simulated seconds per wall second (None: as fast
-    #: as possible)
-    realtime: float | None = None
-    #: run the controller's skip cycles for many locations at once (``runtime/skip.py``)
-    fast_skip: bool = False
-    #: the labels ``on_event`` needs to see (None: all, which rules out fast skips)
-    on_event_labels: frozenset[str] | None = None
-
-
-class MissionContext:
-    """What bindings can see and do (iterator, planner, vehicle, map, logging)."""
-
-    def __init__(self, executor: Executor):
-        self._ex = executor
-        self.grid = executor.grid
-        self.vehicle = executor.vehicle
-        self.iterator: Iterator = executor.iterator
-        self.planner: MotionPlanner = executor.planner
-        self.altitude = executor.altitude
-        self.target_cell: int | None = None
-        self.last_arrival: int | None = None
-        self.done: set[str] = set()
-
-    def predicted_pose(self) -> Pose:
-        """Where the vehicle will be when the current leg ends: the arrival pose of the active
-        target, or the current pose when idle (the Sorter's reference pose)."""
-        if self.target_cell is not None and not self.planner.arrived:
-            x, y = self.grid.centre(self.target_cell)
-            return Pose(x, y, self.planner.heading)
-        p = self.vehicle.pose()
-        return Pose(p.x, p.y, p.course)
-
-    def go(self, cell: int) -> None:
-        self._ex.settle_compute()      # plan from where the aircraft is after thinking
-        self.target_cell = int(cell)
-        arrival = self.planner.go(*self.grid.centre(cell))
-        self._ex.counts["go"] += 1
-        # Sorting happens while the aircraft flies the leg, from the predicted arrival pose.
-        self.iterator.resort(arrival)
-
-    def current_cell(self) -> int | None:
-        """The cell the vehicle is at: the last arrival's cell (the plan only senses the current
-        location after ``arrived``), else the cell under the vehicle."""
-        if self.last_arrival is not None:
-            return self.last_arrival
-        p = self.vehicle.pose()
-        c = self.grid.cell_at(p.x, p.y)
-        return None if c < 0 else int(c)
-
-    def record_photo(self) -> None:
-        p = self.vehicle.pose()
-        cell = self.current_cell()
-        self._ex.photos.append((p.t - self._ex.t0, -1 if cell is None else cell, p.x, p.y))
-
-    def note(self, text: str) -> None:
-        self._ex.log_entry("x", text)
-
-    def done_now(self, kind: str) -> None:
-        """The durative action just started is already complete (e.g. ``takeoff`` while
-        airborne): its answer follows at once instead of waiting for the vehicle event."""
-        self.done.add(kind)
-
-
-class MissionEnd(Exception):
-    def __init__(self, ok: bool, reason: str):
-        super().__init__(reason)
-        self.ok = ok
-        self.reason = reason
 
 
 class Executor:
@@ -219,6 +112,7 @@ class Executor:
         self.compute_s = 0.0
         self._mark = self.cfg.compute_clock()   # start of the current think period
         self.t0 = vehicle.time
+        self.start_pose: Pose | None = None   # where the mission proper began
         self._waiting: dict[str, str] = {}    # vehicle/planner event kind -> answer label
         self._pending: deque[str] = deque()
         self._next_progress = 0.0
@@ -240,13 +134,17 @@ class Executor:
                                      arrival_heading=grid.arrival_heading,
                                      parallel=self.cfg.parallel, cell_size=grid.cell_size,
                                      lead=self.cfg.lead, accept=self.cfg.accept,
-                                     mode=self.cfg.planner_mode)
+                                     mode=self.cfg.planner_mode, headings=self.cfg.headings,
+                                     choice=self.cfg.heading_choice)
         interesting = np.zeros(grid.num_cells, dtype=bool)
         for ids in grid.sensors.values():
             interesting[ids] = True
         sorter = make_sorter(self.cfg.sorter, radius=radius,
                              arrival_heading=grid.arrival_heading, parallel=self.cfg.parallel,
-                             interesting=interesting, seed=self.cfg.seed)
+                             interesting=interesting, seed=self.cfg.seed,
+                             headings=admissible_headings(grid.arrival_heading,
+                                                          self.cfg.parallel, self.cfg.headings),
+                             spacing=grid.cell_size)
         xs, ys = grid.centres()
         p = vehicle.pose()
         self.iterator = Iterator(grid.cells, xs, ys, sorter, Pose(p.x, p.y, p.course))
@@ -344,46 +242,11 @@ class Executor:
     def _fast_skip(self) -> bool:
         """Skip the run of upcoming locations whose cycle from the current state is a pure skip
         (``runtime/skip.py``); True if any was skipped."""
-        it, state = self.iterator, self.controller.state
-        if not it.has_next():
-            return False
-        cache = self._skip_cache.setdefault(state, {})
-        sensors = self._skip_sensors
-        wanted = self.cfg.on_event_labels or frozenset()
-        n = it.next
-        first = sum(int(m[n]) << i for i, m in enumerate(sensors.masks))
-        if first not in cache:
-            cache[first] = cycle(state, first, self.table.delta, self.table.controllable,
-                                 self.bindings, sensors, wanted)
-        if cache[first] is None:       # cheap exit: the next location is not a skip
-            return False
-        total = 0
-        k = 64
-        while it.has_next():
-            cells = np.concatenate([[it.next], it.peek_order(k)])
-            codes = sensors.codes(cells)
-            for code in np.unique(codes).tolist():
-                if code not in cache:
-                    cache[code] = cycle(state, code, self.table.delta, self.table.controllable,
-                                        self.bindings, sensors, wanted)
-            ok = np.fromiter((cache[c] is not None for c in codes.tolist()), bool, len(codes))
-            j = int(np.argmin(ok)) if not ok.all() else len(codes)
-            if j == 0:
-                break
-            for code, n in zip(*np.unique(codes[:j], return_counts=True), strict=True):
-                cyc = cache[int(code)]
-                assert cyc is not None
-                c = cyc.controllable
-                self.counts["steps"] += int(n) * len(cyc.events)
-                self.counts["controllable"] += int(n) * c
-                self.counts["uncontrollable"] += int(n) * (len(cyc.events) - c)
-            it.skip_run(j)
-            total += j
-            if j < len(codes):
-                break
-            k = min(4 * k, 1 << 20)
+        total = fast_skip(self.iterator, self.controller.state,
+                          self._skip_cache.setdefault(self.controller.state, {}),
+                          self._skip_sensors, self.table, self.bindings,
+                          self.cfg.on_event_labels or frozenset(), self.counts)
         if total:
-            self.counts["skipped"] += total
             self.log_entry("x", f"fast skip: {total} locations")
         return total > 0
 
@@ -439,6 +302,8 @@ class Executor:
                                     p.y + 2000 * math.sin(p.course))
                     self.planner.arrived = True
                 self.t0 = v.time
+                p = v.pose()
+                self.start_pose = Pose(p.x, p.y, p.course)
                 self._started = True
                 self._loop()
             except KeyboardInterrupt:
@@ -599,38 +464,4 @@ class Executor:
             self._progress()
 
     def _summary(self, ok: bool, reason: str) -> dict:
-        duration = self.vehicle.time - self.t0 if self._started else 0.0
-        tr = np.asarray(self.track, dtype=np.float64).reshape(-1, 4)
-        # Distance flown during the mission proper (after the controller started).
-        m = tr[:, 0] >= 0
-        seg = np.hypot(np.diff(tr[m, 1]), np.diff(tr[m, 2])) if m.sum() > 1 else np.zeros(0)
-        distance = float(seg.sum())
-        # Per iterator pass (a cell is visited once per pass), chained: each pass starts where
-        # the previous one ended.
-        pts = [(x, y) for _, _, x, y in self.arrivals]
-        start = tuple(tr[m][0, 1:3]) if m.any() else self.grid.home
-        ideal = 0.0
-        lo = 0
-        for hi in [*self._pass_marks, len(pts)]:
-            if hi > lo:
-                ideal += ideal_distance(pts[lo:hi], start=start)
-                start = pts[hi - 1]
-            lo = hi
-        speed = self.vehicle.airspeed
-        ideal_t = ideal / speed if speed > 0 else float("nan")
-        overhead = (duration - ideal_t) / ideal_t * 100 if ideal_t > 0 else float("nan")
-        return {
-            "ok": ok, "reason": reason, "controller": self.table.name,
-            "sorter": self.cfg.sorter, "ideal_compute": self.cfg.ideal_compute,
-            "locations": int(len(self.grid.cells)),
-            "duration_s": round(duration, 2), "distance_m": round(distance, 1),
-            "ideal_distance_m": round(ideal, 1), "ideal_duration_s": round(ideal_t, 2),
-            "overhead_pct": round(overhead, 1) if math.isfinite(overhead) else None,
-            "arrivals": self.counts["arrived"], "photos": len(self.photos),
-            "go": self.counts["go"], "steps": self.counts["steps"],
-            "passes": self.counts["passes"], "misses": self.planner.misses,
-            "resorts": self.iterator.resorts,
-            "compute_s": round(self.compute_s, 4) if not self.cfg.ideal_compute else 0.0,
-            "speed_mps": round(speed, 2), "turn_radius_m": round(self.radius, 1),
-            "vehicle": type(self.vehicle).__name__, "safe_state": self.safe_state,
-        }
+        return mission_summary(self, ok, reason)

@@ -109,6 +109,7 @@ class Iterator:
         """Re-initialise: D = ∅, n = the best location of L for ``pose``, R = L \\ {n}."""
         self.done[:] = False
         self.num_done = 0
+        self.sorter.on_reset(self.xs, self.ys, self.ids, pose)
         self._order(np.arange(len(self.ids), dtype=np.int64), pose)
         self._n = self._pop()
 

@@ -32,6 +32,7 @@ always suffices with the default radius).  Only after ``max_misses`` passes does
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -48,6 +49,30 @@ def _m(a: float) -> float:
     if a < 0:
         a += TWO_PI
     return 0.0 if a > TWO_PI - 1e-9 else a
+
+
+class ArrivalHeadings(enum.Enum):
+    """Which arrival headings are admissible at a location."""
+
+    PARALLEL = "parallel"   # the paper's: parallel to the map's fixed direction (either way)
+    GRID = "grid"           # along either grid axis, either way (4 headings)
+
+
+class HeadingChoice(enum.Enum):
+    """How the planner picks one of the admissible arrival headings for a leg."""
+
+    SHORTEST = "shortest"     # the paper's: the shortest path to the target
+    LOOKAHEAD = "lookahead"   # shortest to the target plus the next leg (to the location
+    #                           the Iterator offers next): favours flying on straight
+
+
+def admissible_headings(arrival_heading: float, parallel: bool,
+                        mode: ArrivalHeadings = ArrivalHeadings.PARALLEL) -> tuple[float, ...]:
+    """The arrival headings ``mode`` allows (``parallel=False``: exactly the fixed one)."""
+    h = arrival_heading
+    if mode is ArrivalHeadings.GRID:
+        return (h, h + math.pi, h + math.pi / 2, h - math.pi / 2)
+    return (h, h + math.pi) if parallel else (h,)
 
 
 @dataclass(frozen=True)
@@ -147,9 +172,14 @@ class MotionPlanner:
                  parallel: bool = True, cell_size: float = 50.0, lead: float | None = None,
                  accept: float | None = None, lookahead: float | None = None,
                  mode: str = "course", ds: float = 2.0, max_misses: int = 12,
-                 carrot_distance: float = 400.0, max_lead: float = 4.0):
+                 carrot_distance: float = 400.0, max_lead: float = 4.0,
+                 headings: ArrivalHeadings = ArrivalHeadings.PARALLEL,
+                 choice: HeadingChoice = HeadingChoice.SHORTEST):
         if mode not in ("course", "carrot"):
             raise ValueError(f"unknown planner mode {mode!r}")
+        self.admissible = admissible_headings(arrival_heading, parallel, headings)
+        self.choice = choice
+        self._fixed: tuple[float, ...] | None = None   # the heading chosen for this target
         self.vehicle = vehicle
         self.radius = float(radius)
         self.arrival_heading = float(arrival_heading)
@@ -176,18 +206,34 @@ class MotionPlanner:
 
     # -- planning -----------------------------------------------------------------------------
     def path_to(self, start: Pose, x: float, y: float) -> DubinsPath:
-        """Shortest admissible path (arrival heading, or either direction when parallel)."""
-        best = shortest_csc(start, x, y, self.arrival_heading, self.radius)
-        if self.parallel:
-            other = shortest_csc(start, x, y, self.arrival_heading + math.pi, self.radius)
-            if other.length < best.length - 1e-9:
-                best = other
+        """Shortest admissible path (the first of equally long ones: the arrival heading
+        before its opposite)."""
+        best: DubinsPath | None = None
+        for h in self._headings():
+            cand = shortest_csc(start, x, y, h, self.radius)
+            if best is None or cand.length < best.length - 1e-9:
+                best = cand
+        assert best is not None
         return best
 
-    def go(self, x: float, y: float) -> Pose:
-        """Start flying to ``(x, y)``; returns the predicted arrival pose (for the Sorter)."""
+    def go(self, x: float, y: float, then: tuple[float, float] | None = None) -> Pose:
+        """Start flying to ``(x, y)``; returns the predicted arrival pose (for the Sorter).
+        ``then``: the location expected next (``HeadingChoice.LOOKAHEAD`` picks the arrival
+        heading that minimises this leg plus the next one)."""
         self.target = (float(x), float(y))
         self._target_misses = 0
+        self._fixed = None
+        if then is not None and self.choice is HeadingChoice.LOOKAHEAD:
+            p = self.vehicle.pose()
+            start = Pose(p.x, p.y, p.course)
+
+            def cost(h: float) -> float:
+                leg = shortest_csc(start, x, y, h, self.radius).length
+                nxt = min(shortest_csc(Pose(x, y, h), then[0], then[1], h2, self.radius).length
+                          for h2 in self.admissible)
+                return leg + nxt
+
+            self._fixed = (min(self.admissible, key=cost),)
         self._plan()
         return Pose(x, y, self.heading)
 
@@ -217,9 +263,8 @@ class MotionPlanner:
         self._idx = 0
         self.arrived = False
 
-    def _headings(self) -> list[float]:
-        h = self.arrival_heading
-        return [h, h + math.pi] if self.parallel else [h]
+    def _headings(self) -> tuple[float, ...]:
+        return self._fixed if self._fixed is not None else self.admissible
 
     def _lead_in_path(self, start: Pose, heading: float, lead_in: float) -> DubinsPath:
         assert self.target is not None

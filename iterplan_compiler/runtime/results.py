@@ -15,6 +15,7 @@ import numpy as np
 
 from iterplan_compiler.outputs import atomic_write_bytes, atomic_write_json, atomic_write_text
 from iterplan_compiler.runtime.grid import GridMap
+from iterplan_compiler.runtime.ideal import ideal_distance  # noqa: F401  (re-exported)
 
 
 @contextmanager
@@ -143,29 +144,3 @@ class MissionResult:
         fig.savefig(buf, format="png")
         atomic_write_bytes(path, buf.getvalue())
         plt.close(fig)
-
-
-def ideal_distance(points: Sequence[tuple[float, float]], start: tuple[float, float]) -> float:
-    """The paper's "ideal": minimum straight-line flight distance to visit ``points`` from
-    ``start`` at constant speed, ignoring turn limits.  The exact minimum is a TSP; we take the
-    better of two feasible tours — the order actually flown and a nearest-neighbour tour (for up
-    to 5,000 points) — so it is an upper bound on the true minimum and overheads are, if
-    anything, under-stated."""
-    if not points:
-        return 0.0
-    pts = np.asarray(points, dtype=np.float64)
-    path = np.vstack([np.asarray(start, dtype=np.float64)[None, :], pts])
-    flown = float(np.hypot(*np.diff(path, axis=0).T).sum())
-    if len(pts) > 5000:
-        return flown
-    todo = np.ones(len(pts), dtype=bool)
-    cur = np.asarray(start, dtype=np.float64)
-    total = 0.0
-    for _ in range(len(pts)):
-        d = np.hypot(pts[:, 0] - cur[0], pts[:, 1] - cur[1])
-        d[~todo] = np.inf
-        i = int(np.argmin(d))
-        total += float(d[i])
-        todo[i] = False
-        cur = pts[i]
-    return min(flown, total)

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from iterplan_compiler.runtime.bindings import Binding
+from iterplan_compiler.runtime.controller import ControllerTable
+from iterplan_compiler.runtime.iterator import Iterator
 
 MAX_CYCLE = 64
 
@@ -109,3 +111,48 @@ def cycle(state: int, code: int, delta: Mapping[int, Mapping[str, int]],
             events.append(("c", label))
             s = moves[label]
     return None
+
+
+def fast_skip(it: Iterator, state: int, cache: dict[int, Cycle | None], sensors: Sensors,
+              table: ControllerTable, bindings: Mapping[str, Binding],
+              wanted: Collection[str], counts: dict[str, int]) -> int:
+    """Skip the run of upcoming locations of ``it`` whose cycle from controller ``state`` is a
+    pure skip (module docstring); their events go to ``counts``.  ``cache`` maps a location
+    class to its cycle from ``state`` (filled lazily).  Returns the number skipped."""
+    if not it.has_next():
+        return 0
+    n = it.next
+    assert n is not None
+    first = sum(int(m[n]) << i for i, m in enumerate(sensors.masks))
+
+    def lookup(code: int) -> Cycle | None:
+        if code not in cache:
+            cache[code] = cycle(state, code, table.delta, table.controllable, bindings,
+                                sensors, wanted)
+        return cache[code]
+
+    if lookup(first) is None:           # cheap exit: the next location is not a skip
+        return 0
+    total = 0
+    k = 64
+    while it.has_next():
+        cells = np.concatenate([[it.next], it.peek_order(k)])
+        codes = sensors.codes(cells)
+        ok = np.fromiter((lookup(c) is not None for c in codes.tolist()), bool, len(codes))
+        j = int(np.argmin(ok)) if not ok.all() else len(codes)
+        if j == 0:
+            break
+        for code, reps in zip(*np.unique(codes[:j], return_counts=True), strict=True):
+            cyc = cache[int(code)]
+            assert cyc is not None
+            c = cyc.controllable
+            counts["steps"] += int(reps) * len(cyc.events)
+            counts["controllable"] += int(reps) * c
+            counts["uncontrollable"] += int(reps) * (len(cyc.events) - c)
+        it.skip_run(j)
+        total += j
+        if j < len(codes):
+            break
+        k = min(4 * k, 1 << 20)
+    counts["skipped"] += total
+    return total

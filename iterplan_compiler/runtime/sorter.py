@@ -26,6 +26,7 @@ arrival heading, 220 for parallel; ``benchmarks/sorter_bench.py`` prints the thr
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -328,6 +329,10 @@ class Sorter:
         the Iterator uses them to score only the locations that can come next."""
         return None
 
+    def on_reset(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> None:
+        """The Iterator starts a pass over all of L from ``pose`` (a planning sorter plans
+        here, before the mission clock runs or between passes); default: nothing."""
+
     def best(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> int:
         """Index (into the given arrays) of the location a full stable sort by :meth:`keys`
         would put first: the smallest key, ties to the lowest index.  One kernel pass and an
@@ -342,11 +347,17 @@ class DistanceSorter(Sorter):
     radius: float
     arrival_heading: float
     parallel: bool = True
+    #: also admit the other grid axis (``ArrivalHeadings.GRID``: 4 headings)
+    grid: bool = False
     name = "distance"
 
     def keys(self, xs, ys, ids, pose):
-        return dubins_lengths(pose, xs, ys, self.arrival_heading, self.radius,
-                              parallel=self.parallel)
+        out = dubins_lengths(pose, xs, ys, self.arrival_heading, self.radius,
+                             parallel=self.parallel or self.grid)
+        if self.grid:
+            np.fmin(out, dubins_lengths(pose, xs, ys, self.arrival_heading + math.pi / 2,
+                                        self.radius, parallel=True), out=out)
+        return out
 
     def lower_bounds(self, xs, ys, pose):
         """Straight-line distance from the pose: no path to a location is shorter."""
@@ -383,19 +394,49 @@ class RandomSorter(Sorter):
         return self.rng.random(len(ids), dtype=np.float32)
 
 
-SORTERS = ("distance", "last", "random")
+class SorterKind(enum.Enum):
+    """The strategies (``iterc run --sorter``): the paper's three and the planned tour."""
+
+    DISTANCE = "distance"
+    LAST = "last"
+    RANDOM = "random"
+    TOUR = "tour"          # runtime/tour.py
 
 
-def make_sorter(name: str, *, radius: float = 50.0, arrival_heading: float = math.pi / 2,
-                parallel: bool = True, interesting: np.ndarray | None = None,
-                seed: int = 0) -> Sorter:
-    """Build a sorter by strategy name (``distance``, ``last``, ``random``)."""
-    if name == "distance":
-        return DistanceSorter(radius, arrival_heading, parallel)
-    if name == "last":
-        if interesting is None:
-            raise ValueError("the 'last' sorter needs the interesting-cells mask")
-        return LastSorter(interesting)
-    if name == "random":
+SORTERS = tuple(k.value for k in SorterKind)
+
+
+def sorter_kind(name: str | SorterKind) -> SorterKind:
+    """The :class:`SorterKind` named ``name`` (ValueError with the choices otherwise)."""
+    if isinstance(name, SorterKind):
+        return name
+    try:
+        return SorterKind(name)
+    except ValueError:
+        raise ValueError(f"unknown sorter {name!r}; choose one of {', '.join(SORTERS)}") \
+            from None
+
+
+def make_sorter(name: str | SorterKind, *, radius: float = 50.0,
+                arrival_heading: float = math.pi / 2, parallel: bool = True,
+                interesting: np.ndarray | None = None, seed: int = 0,
+                headings: tuple[float, ...] | None = None, spacing: float = 50.0) -> Sorter:
+    """Build a sorter (``distance``, ``last``, ``random``, ``tour``).  ``headings``: the
+    admissible arrival headings for ``tour`` (default: the arrival heading, and its opposite
+    when ``parallel``)."""
+    kind = sorter_kind(name)
+    if kind is SorterKind.DISTANCE:
+        return DistanceSorter(radius, arrival_heading, parallel,
+                              grid=headings is not None and len(headings) == 4)
+    if kind is SorterKind.RANDOM:
         return RandomSorter(seed)
-    raise ValueError(f"unknown sorter {name!r}; choose one of {', '.join(SORTERS)}")
+    if interesting is None:
+        raise ValueError(f"the {kind.value!r} sorter needs the interesting-cells mask")
+    if kind is SorterKind.LAST:
+        return LastSorter(interesting)
+    from iterplan_compiler.runtime.tour import TourSorter
+
+    if headings is None:
+        headings = (arrival_heading, arrival_heading + math.pi) if parallel else \
+            (arrival_heading,)
+    return TourSorter(radius, arrival_heading, interesting, headings, spacing)
