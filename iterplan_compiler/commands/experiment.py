@@ -8,9 +8,12 @@
     iterc experiment synthesis-table --max-n 6
 
 Writes ``<out>/<exp>.csv`` (one row per simulated mission), ``<out>/<exp>_summary.csv``
-(mean ± 3 SEM per point) and ``<out>/<exp>.png``; prints the summary.  While a sweep runs,
-each finished mission is appended to ``<out>/<exp>.partial.csv``; a sweep that was killed
-resumes from it (``--fresh`` starts over).  Every file is written atomically (outputs.py).
+(mean ± 3 SEM per point) and ``<out>/<exp>.png``; fig3a writes ``<out>/fig3a.csv`` (loop time
+per universe) and ``<out>/fig3a.png``; prints the summary.  While a sweep runs, each finished
+mission is appended to ``<out>/<exp>.partial.csv``; a sweep that was killed resumes from it,
+and a re-run skips the runs already in ``<out>/<exp>.csv`` (``--fresh`` starts over).  Every
+file is written atomically (outputs.py).  ``--jobs N`` runs on a ``dask.distributed``
+LocalCluster of N workers, ``--scheduler ADDR`` on an existing Dask cluster.
 """
 
 from __future__ import annotations
@@ -42,7 +45,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--jobs", "-j", type=int, default=1,
                         help="parallel processes (default 1; 0 = one per CPU)")
     parser.add_argument("--scheduler", default=None, metavar="ADDR",
-                        help="run on a Dask cluster at ADDR (needs dask.distributed)")
+                        help="run on the Dask cluster at ADDR, e.g. tcp://host:8786 (default "
+                             "with --jobs > 1: a dask.distributed LocalCluster of that many "
+                             "workers; pip install 'iterplan[experiments]')")
+    parser.add_argument("--vehicle", choices=("sitl", "paper"), default="sitl",
+                        help="simulated aircraft: the SITL-calibrated simulator at the "
+                             "paper's 17 m/s cruise (default) or the plain kinematic model")
     parser.add_argument("--out", "-o", default="iterplan-experiments",
                         help="output directory (default ./iterplan-experiments)")
     parser.add_argument("--max-n", type=int, default=None,
@@ -111,12 +119,15 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     if problem:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
-    runner = missions.Runner(str(out / "controllers"), fast_skip=args.fast_skip)
+    runner = missions.Runner(str(out / "controllers"), fast_skip=args.fast_skip,
+                             vehicle=missions.VehicleKind(args.vehicle))
     # Each finished run is appended to <name>.partial.csv at once (one fsync-ed line), so a
     # sweep killed after hours resumes where it stopped: runs already in the file are kept.
     partial = out / f"{name}.partial.csv"
     fields = harness.CASE_FIELDS + harness.RESULT_FIELDS
-    done_rows = [] if args.fresh else _resumable_rows(partial, fields)
+    final = out / f"{name}.csv"
+    done_rows = [] if args.fresh else _resumable_rows(partial, fields) + \
+        _finished_rows(final, fields)
     ident = {tuple(str(r[f]) for f in harness.CASE_FIELDS): r for r in done_rows
              if not r.get("error")}  # failed runs are run again
     todo = [c for c in cases
@@ -125,8 +136,10 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
         kept = len(cases) - len(todo)
         print(f"iterc experiment {name}: resuming: {kept} of {len(cases)} runs already done "
               f"in {partial} (--fresh to start over)", file=sys.stderr)
-    else:
+    if not partial.exists() or args.fresh or not _resumable_rows(partial, fields):
         outputs.atomic_write_text(partial, _csv_line(fields, {f: f for f in fields}))
+        for r in done_rows:             # keep the finished runs of the final CSV
+            outputs.append_line(partial, _csv_line(fields, r))
     prog = harness.Progress(len(todo), name, enabled=not args.no_progress)
 
     def save(row: dict) -> None:
@@ -141,8 +154,11 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     by_case = dict(ident)
     for r in new_rows:
         by_case[tuple(str(r[f]) for f in harness.CASE_FIELDS)] = r
-    rows = [by_case[k] for k in (tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS)
-                                 for c in cases) if k in by_case]
+    keys = [tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS) for c in cases]
+    rows = [by_case[k] for k in keys if k in by_case]
+    # finished runs of other sizes/sorters/seeds stay in the CSV (a sweep grows by re-runs)
+    wanted = set(keys)
+    rows += [r for k, r in sorted(by_case.items()) if k not in wanted]
     outputs.atomic_write_text(out / f"{name}.csv", harness.write_csv(rows))
     partial.unlink()  # only once the complete CSV is in place
     points = harness.aggregate(rows)
@@ -163,6 +179,16 @@ def _csv_line(fields: list[str], row: dict) -> str:
     csv.DictWriter(buf, fieldnames=fields, extrasaction="ignore",
                    lineterminator="\n").writerow({k: row.get(k, "") for k in fields})
     return buf.getvalue()
+
+
+def _finished_rows(final: Path, fields: list[str]) -> list[dict]:
+    """Rows of a previous complete run (``<exp>.csv``): a re-run skips them too."""
+    if not final.exists():
+        return []
+    rows = list(csv.DictReader(io.StringIO(final.read_text(encoding="utf-8"))))
+    if rows and not set(fields) <= set(rows[0].keys()):
+        return []
+    return rows
 
 
 def _resumable_rows(partial: Path, fields: list[str]) -> list[dict]:
@@ -190,10 +216,15 @@ def _trajectories(args, out: Path) -> int:
     runs = trajectories.fly_tracks(out / "controllers", sizes, seed=0)
     bad = [(u, r.reason) for u, r, _ in runs if not r.ok]
     png = trajectories.plot_tracks(runs, out / "fig3a.png")
-    for u, r, _ in runs:
+    lines = ["universe,loop_s,ideal_s,overhead_pct"]
+    for u, r, grid in runs:
         loops = missions.loop_times(r.log)
-        print(f"fig3a: {u:>9,} locations: loop {loops[0] if loops else float('nan'):8.1f} s")
-    print(f"wrote {png}")
+        loop = loops[0] if loops else float("nan")
+        ideal = trajectories.ideal_loop(grid, r.speed)
+        print(f"fig3a: {u:>9,} locations: loop {loop:8.1f} s (ideal {ideal:.1f} s)")
+        lines.append(f"{u},{loop:.3f},{ideal:.3f},{100 * (loop - ideal) / ideal:.2f}")
+    outputs.atomic_write_text(out / "fig3a.csv", "\n".join(lines) + "\n")
+    print(f"wrote {out / 'fig3a.csv'}, {png}")
     if bad:
         print(f"iterc experiment fig3a: mission(s) ended early: {bad}", file=sys.stderr)
         return 1

@@ -6,8 +6,10 @@ a failed row (``error`` column) rather than aborting the sweep: one crashed simu
 throw away hours of others.
 
 Executors: ``jobs == 1`` runs in this process (deterministic order, easiest to debug);
-``jobs > 1`` uses a :class:`concurrent.futures.ProcessPoolExecutor`; a Dask scheduler address
-uses ``dask.distributed`` if it is installed.
+``jobs > 1`` starts a ``dask.distributed`` :class:`LocalCluster` of ``jobs`` single-threaded
+worker processes (the ``experiments`` extra; without it a
+:class:`concurrent.futures.ProcessPoolExecutor`); a scheduler address (``--scheduler
+tcp://host:8786``) runs the cases on that Dask cluster, past one machine.
 """
 
 from __future__ import annotations
@@ -39,41 +41,29 @@ class ExperimentError(RuntimeError):
 
 
 class Progress:
-    """A small text progress bar on ``stream`` (redrawn in place on a terminal, a line every
-    10 % otherwise, so CI logs stay short)."""
+    """A tqdm progress bar on ``stream`` (stderr): redrawn in place on a terminal; elsewhere
+    (CI logs) a line at most every 30 s."""
 
     def __init__(self, total: int, label: str, stream: TextIO | None = None,
                  enabled: bool = True):
+        from tqdm import tqdm
+
         self.total, self.label, self.done, self.failed = total, label, 0, 0
         self.stream = stream if stream is not None else sys.stderr
+        tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.enabled = enabled
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.start = time.monotonic()
-        self._last_decile = -1
+        self._bar = tqdm(total=total, desc=label, file=self.stream, disable=not enabled,
+                         mininterval=0.2 if tty else 30.0, ascii=not tty, unit="run",
+                         dynamic_ncols=tty)
 
     def update(self, ok: bool = True) -> None:
         self.done += 1
         self.failed += 0 if ok else 1
-        if not self.enabled:
-            return
-        frac = self.done / self.total if self.total else 1.0
-        width = 30
-        bar = "#" * int(frac * width) + "." * (width - int(frac * width))
-        elapsed = time.monotonic() - self.start
-        eta = elapsed / self.done * (self.total - self.done) if self.done else 0.0
-        fail = f", {self.failed} failed" if self.failed else ""
-        text = (f"{self.label} [{bar}] {self.done}/{self.total}{fail} "
-                f"{elapsed:6.1f}s elapsed, ~{eta:5.1f}s left")
-        if self.tty:
-            end = "\n" if self.done == self.total else ""
-            self.stream.write("\r" + text + end)
-            self.stream.flush()
-        else:
-            decile = int(frac * 10)
-            if decile != self._last_decile or self.done == self.total:
-                self._last_decile = decile
-                self.stream.write(text + "\n")
-                self.stream.flush()
+        if self.failed:
+            self._bar.set_postfix(failed=self.failed, refresh=False)
+        self._bar.update(1)
+        if self.done >= self.total:
+            self._bar.close()
 
 
 def _run_one(runner: Runner, case: Case) -> dict:
@@ -107,13 +97,19 @@ def run_cases(cases: Sequence[Case], runner: Runner, *, jobs: int = 1,
         if progress is not None:
             progress.update(ok=not row.get("error"))
 
-    if scheduler:
+    if scheduler or (jobs > 1 and dask_available()):
         try:
-            from dask.distributed import Client, as_completed  # type: ignore[import-not-found]
+            from dask.distributed import Client, LocalCluster, as_completed
         except ImportError:
             raise ExperimentError("--scheduler needs dask.distributed "
-                                  "(pip install 'dask[distributed]')") from None
-        client = Client(scheduler)
+                                  "(pip install 'iterplan[experiments]')") from None
+        cluster = None
+        if scheduler:
+            client = Client(scheduler)
+        else:   # one single-threaded worker process per job: missions are CPU-bound Python
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
         try:
             futures = {client.submit(_run_one, runner, c, pure=False): i
                        for i, c in enumerate(cases)}
@@ -121,6 +117,8 @@ def run_cases(cases: Sequence[Case], runner: Runner, *, jobs: int = 1,
                 done(futures[fut], fut.result())
         finally:
             client.close()
+            if cluster is not None:
+                cluster.close()
     elif jobs <= 1:
         for i, case in enumerate(cases):
             done(i, _run_one(runner, case))
@@ -130,6 +128,13 @@ def run_cases(cases: Sequence[Case], runner: Runner, *, jobs: int = 1,
             for fut in cf.as_completed(futs):
                 done(futs[fut], fut.result())
     return [r for r in rows if r is not None]
+
+
+def dask_available() -> bool:
+    """True when ``dask.distributed`` can be imported (the ``experiments`` extra)."""
+    import importlib.util
+
+    return importlib.util.find_spec("distributed") is not None
 
 
 def extra_fields(rows: Iterable[dict]) -> list[str]:

@@ -17,7 +17,10 @@ TITLES = {
     "fig3c": "Cover: overhead vs locations to cover (universe 713)",
     "fig3d": "Cover of 61 locations: duration vs number of locations",
 }
-MARKERS = {"distance": "o", "last": "s", "random": "^"}
+MARKERS = {"distance": "o", "last": "s", "random": "^", "tour": "D"}
+#: The paper's numbers (Section "Runtime Overhead"), drawn into the figures.
+PAPER_PATROL_700K_PCT = 88.0     # Ordered Patrol at 700,000 locations: at most +88 % over ideal
+PAPER_COVER_PCT = 60.0           # Cover, distance sorter: near constant ~60 % overhead
 
 
 def plot(experiment: str, points: Sequence[Point], path: Path) -> Path:
@@ -47,6 +50,15 @@ def plot(experiment: str, points: Sequence[Point], path: Path) -> Path:
             ideal.setdefault(xof(p), []).append(p.ideal)
         xs = sorted(ideal)
         ax.plot(xs, [sum(ideal[x]) / len(ideal[x]) / 60.0 for x in xs], "k--", label="ideal")
+    if experiment == "fig3c":
+        ax.axhline(PAPER_COVER_PCT, color="0.4", linestyle=":", lw=1.2,
+                   label=f"paper, distance (~{PAPER_COVER_PCT:g} %)")
+    elif experiment == "fig3b" and pts:
+        big = [p for p in pts if p.universe == max(q.universe for q in pts)]
+        if big and big[0].universe >= 100_000:
+            ref = big[0].ideal * (1 + PAPER_PATROL_700K_PCT / 100) / 60.0
+            ax.plot([big[0].universe], [ref], marker="*", color="0.3", ms=10, linestyle="none",
+                    label=f"paper at 700k (ideal +{PAPER_PATROL_700K_PCT:g} %)")
     if experiment == "fig3c":
         ax.set_xlabel("locations to cover")
         ax.set_ylabel("overhead over ideal [%]")

@@ -58,9 +58,9 @@ FULL: dict[str, SweepConfig] = {
     "fig3b": SweepConfig("fig3b", (1_000, 10_000, 50_000, 100_000, 200_000, 400_000, 700_000),
                          (3,), seeds=30, loops=2),
     "fig3c": SweepConfig("fig3c", (COVER_UNIVERSE_3C,), (10, 25, 61, 100, 150, 200, 300),
-                         seeds=6),
+                         seeds=30),
     "fig3d": SweepConfig("fig3d", (200, 713, 2_000, 10_000, 50_000, 100_000, 200_000),
-                         (COVER_COUNT_3D,), seeds=6),
+                         (COVER_COUNT_3D,), seeds=30),
 }
 
 QUICK: dict[str, SweepConfig] = {

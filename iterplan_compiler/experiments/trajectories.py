@@ -32,6 +32,14 @@ def fly_tracks(ctrl_dir: Path, sizes, sorter: str = "last", seed: int = 0, loops
     return out
 
 
+def ideal_loop(grid, speed: float) -> float:
+    """The ideal loop time (s) of the patrol cells of ``grid`` (p.0, p.1, ... in order)."""
+    from iterplan_compiler.experiments.stats import ideal_patrol_loop
+
+    names = sorted(k for k in grid.sensors if k.startswith("p."))
+    return ideal_patrol_loop([grid.centre(int(grid.sensors[k][0])) for k in names], speed)
+
+
 def plot_tracks(runs, path: Path) -> Path:
     """Overlay the flown tracks (from the first patrol visit on) and the patrol cells."""
     import matplotlib

@@ -95,10 +95,12 @@ class MissionContext:
     def go(self, cell: int) -> None:
         self._ex.settle_compute()      # plan from where the aircraft is after thinking
         self.target_cell = int(cell)
-        then = None
-        if self.planner.choice is HeadingChoice.LOOKAHEAD and self.iterator.remaining_count():
-            then = self.grid.centre(int(self.iterator.peek_order(1)[0]))
-        arrival = self.planner.go(*self.grid.centre(cell), then=then)
+        then, planned = None, None
+        if self.planner.choice is HeadingChoice.LOOKAHEAD:
+            planned = self.iterator.sorter.planned_heading(cell)
+            if planned is None and self.iterator.remaining_count():
+                then = self.grid.centre(int(self.iterator.peek_order(1)[0]))
+        arrival = self.planner.go(*self.grid.centre(cell), then=then, heading=planned)
         self._ex.counts["go"] += 1
         # Sorting happens while the aircraft flies the leg, from the predicted arrival pose.
         self.iterator.resort(arrival)

@@ -216,14 +216,18 @@ class MotionPlanner:
         assert best is not None
         return best
 
-    def go(self, x: float, y: float, then: tuple[float, float] | None = None) -> Pose:
+    def go(self, x: float, y: float, then: tuple[float, float] | None = None,
+           heading: float | None = None) -> Pose:
         """Start flying to ``(x, y)``; returns the predicted arrival pose (for the Sorter).
         ``then``: the location expected next (``HeadingChoice.LOOKAHEAD`` picks the arrival
-        heading that minimises this leg plus the next one)."""
+        heading that minimises this leg plus the next one); ``heading``: an arrival heading
+        planned by the Sorter (``tour``), taken as it is under ``LOOKAHEAD``."""
         self.target = (float(x), float(y))
         self._target_misses = 0
         self._fixed = None
-        if then is not None and self.choice is HeadingChoice.LOOKAHEAD:
+        if heading is not None and self.choice is HeadingChoice.LOOKAHEAD:
+            self._fixed = (float(heading),)
+        elif then is not None and self.choice is HeadingChoice.LOOKAHEAD:
             p = self.vehicle.pose()
             start = Pose(p.x, p.y, p.course)
 

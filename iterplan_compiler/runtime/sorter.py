@@ -333,6 +333,11 @@ class Sorter:
         """The Iterator starts a pass over all of L from ``pose`` (a planning sorter plans
         here, before the mission clock runs or between passes); default: nothing."""
 
+    def planned_heading(self, cell: int) -> float | None:
+        """The arrival heading this sorter planned for ``cell`` (a planning sorter; the
+        motion planner then arrives so), or None: the planner chooses."""
+        return None
+
     def best(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> int:
         """Index (into the given arrays) of the location a full stable sort by :meth:`keys`
         would put first: the smallest key, ties to the lowest index.  One kernel pass and an
