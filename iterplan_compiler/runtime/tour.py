@@ -206,6 +206,18 @@ def candidate_orders(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
     return cands
 
 
+def plan_tour(pts: np.ndarray, start: Pose, headings: tuple[float, ...], radius: float,
+              spacing: float) -> tuple[list[int], list[float]]:
+    """The shortest (kinematic floor) of the candidate orders of ``pts`` from ``start``:
+    (order, arrival heading at each point of the order)."""
+    if len(pts) == 0:
+        return [], []
+    cands = candidate_orders(pts, start, headings, radius, spacing) if len(pts) > 1 else [[0]]
+    plans = [(dubins_order_plan(pts[o], start, headings, radius), o) for o in cands]
+    (_, heads), order = min(plans, key=lambda p: p[0][0])
+    return order, heads
+
+
 @dataclass
 class TourSorter(Sorter):
     """Tour cells (``interesting``, a bool mask by cell id) in planned tour order, then every
