@@ -137,7 +137,8 @@ class VehicleKind(enum.Enum):
     PAPER = "paper"     # the plain kinematic model at 18.2 m/s TAS, 45 deg bank
 
 
-LOOKAHEAD = True
+#: the tour sorter's admissible arrival headings (sweeps)
+TOUR_HEADINGS_NAME = "parallel"
 SITL_SLOW_PARAMS = {"AIRSPEED_CRUISE": 17.0, "WP_LOITER_RAD": 60.0}
 
 
@@ -152,8 +153,10 @@ def arrival_for(sorter: str):
     flies its planned order with the look-ahead heading choice (issue #15's "order" lever)."""
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
 
-    choice = HeadingChoice.LOOKAHEAD if sorter == "tour" and LOOKAHEAD else HeadingChoice.SHORTEST
-    return ArrivalHeadings.PARALLEL, choice
+    TOUR_HEADINGS = ArrivalHeadings(TOUR_HEADINGS_NAME)
+    if sorter == "tour":
+        return TOUR_HEADINGS, HeadingChoice.LOOKAHEAD
+    return ArrivalHeadings.PARALLEL, HeadingChoice.SHORTEST
 
 
 class Runner:
