@@ -191,7 +191,7 @@ def aggregate(rows: Iterable[dict]) -> list[Point]:
         d = summarize(float(r["duration"]) for r in ok)
         o = summarize(float(r["overhead_pct"]) for r in ok)
         ideal = summarize(float(r["ideal"]) for r in ok).mean
-        points.append(Point(*key, n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
+        points.append(Point(key[0], key[1], key[2], key[3], n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
                             overhead_pct=o.mean, overhead_err3=o.err3,
                             failed=len(rs) - len(ok)))
     return points

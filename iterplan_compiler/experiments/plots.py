@@ -45,7 +45,7 @@ def plot(experiment: str, points: Sequence[Point], path: Path) -> Path:
         ax.errorbar([xof(p) for p in sp], ys, yerr=es, marker=MARKERS.get(sorter, "x"),
                     capsize=3, linestyle="-", label=sorter)
     if experiment != "fig3c" and pts:
-        ideal = {}
+        ideal: dict[int, list[float]] = {}
         for p in pts:
             ideal.setdefault(xof(p), []).append(p.ideal)
         xs = sorted(ideal)

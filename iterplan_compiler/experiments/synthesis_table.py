@@ -64,8 +64,9 @@ def synthesise_text(path: Path, text: str, composite: str) -> dict:
         if isinstance(stats.get(key), int):
             states = stats[key]
             break
-    if states is None and getattr(result, "composition", None) is not None:
-        states = result.composition.num_states
+    comp = getattr(result, "composition", None)
+    if states is None and comp is not None:
+        states = comp.num_states
     return {"status": "realizable" if result.realizable else "unrealizable",
             "load_s": t1 - t0, "synth_s": t2 - t1, "states": states,
             "detail": "" if result.realizable else str(result.explanation)[:200]}

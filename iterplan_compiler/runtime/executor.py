@@ -46,8 +46,6 @@ __all__ = ["Executor", "LogEntry", "MissionContext", "MissionEnd", "MissionResul
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -66,10 +64,10 @@ from iterplan_compiler.runtime.controller import (  # load_controller: re-export
     load_controller,
 )
 from iterplan_compiler.runtime.grid import GridMap
-from iterplan_compiler.runtime.iterator import Iterator
-from iterplan_compiler.runtime.planner import MotionPlanner, admissible_headings
 from iterplan_compiler.runtime.ideal import ideal_distance  # re-exported
+from iterplan_compiler.runtime.iterator import Iterator
 from iterplan_compiler.runtime.mission import MissionContext, MissionEnd, RunConfig
+from iterplan_compiler.runtime.planner import MotionPlanner, admissible_headings
 from iterplan_compiler.runtime.results import LogEntry, MissionResult  # re-exported
 from iterplan_compiler.runtime.skip import Cycle, fast_skip, static_sensors
 from iterplan_compiler.runtime.sorter import Pose, make_sorter
@@ -337,7 +335,7 @@ class Executor:
             if getattr(v, "armed", False):
                 try:
                     v.disarm()
-                    status = "disarmed on the ground" if not v.armed else \
+                    status = "disarmed on the ground" if not getattr(v, "armed", False) else \
                         "on the ground, still armed: disarm refused"
                 except (VehicleError, KeyboardInterrupt) as exc:
                     status = f"on the ground, still armed: {exc}"
@@ -407,12 +405,8 @@ class Executor:
                     self.log_entry("u", label)
                 if on_event is not None and on_event("u", label):
                     raise MissionEnd(True, f"stopped by on_event at {label}")
-                if label in no_next:
-                    counts["passes"] += 1
-                    self._pass_marks.append(len(self.arrivals))
-                    if cfg.passes and counts["passes"] >= cfg.passes:
-                        self.settle_compute()
-                        return
+                if label in no_next and self._pass_done():
+                    return
                 continue
             if skipping and self._fast_skip():
                 since = 0
@@ -433,11 +427,7 @@ class Executor:
                     else:
                         self._answer(out)
                 if b.completes_on and b.answer:
-                    if b.completes_on in ctx.done:        # completed already (airborne start)
-                        ctx.done.discard(b.completes_on)
-                        pending.append(b.answer)
-                    else:
-                        self._waiting[b.completes_on] = b.answer
+                    self._await(b)
                 counts["steps"] += 1
                 counts["controllable"] += 1
                 if b.kind in progress_kinds:
@@ -446,22 +436,46 @@ class Executor:
                     since += 1
                     if since > limit:
                         raise MissionEnd(False, f"livelock: {limit} controller steps without "
-                                                f"waiting for the vehicle or moving the "
-                                                f"iterator")
+                                                "waiting for the vehicle or moving the iterator")
                 continue
-            if not ctrl.enabled():
-                raise MissionEnd(False, f"controller deadlocked in state {ctrl.state}")
-            if not self._waiting:
-                exp = ", ".join(sorted(ctrl.enabled() & uncontrollable))
-                raise MissionEnd(False, f"controller waits for {exp}, which nothing will produce")
-            if v.time - self.t0 > cfg.max_time:
-                raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
-            self._check_wall()
-            self.settle_compute()
-            self._physical_tick(cfg.tick)
-            self._mark = perf()
+            self._wait_tick()
             since = 0
-            self._progress()
+
+    def _pass_done(self) -> bool:
+        """An iterator pass was answered (``n.next``); True when the mission is complete."""
+        self.counts["passes"] += 1
+        self._pass_marks.append(len(self.arrivals))
+        if self.cfg.passes and self.counts["passes"] >= self.cfg.passes:
+            self.settle_compute()
+            return True
+        return False
+
+    def _await(self, b: Binding) -> None:
+        """A durative action started: its answer comes with the vehicle/planner event
+        ``b.completes_on``, or at once if that already happened (airborne start)."""
+        assert b.completes_on and b.answer
+        if b.completes_on in self.ctx.done:
+            self.ctx.done.discard(b.completes_on)
+            self._pending.append(b.answer)
+        else:
+            self._waiting[b.completes_on] = b.answer
+
+    def _wait_tick(self) -> None:
+        """Nothing to decide: let time pass one ``tick`` (after the deadlock, time and wall
+        checks), with the think time charged first."""
+        ctrl, cfg = self.controller, self.cfg
+        if not ctrl.enabled():
+            raise MissionEnd(False, f"controller deadlocked in state {ctrl.state}")
+        if not self._waiting:
+            exp = ", ".join(sorted(ctrl.enabled() & self.table.uncontrollable))
+            raise MissionEnd(False, f"controller waits for {exp}, which nothing will produce")
+        if self.vehicle.time - self.t0 > cfg.max_time:
+            raise MissionEnd(False, f"time limit of {cfg.max_time:.0f} s reached")
+        self._check_wall()
+        self.settle_compute()
+        self._physical_tick(cfg.tick)
+        self._mark = cfg.compute_clock()
+        self._progress()
 
     def _summary(self, ok: bool, reason: str) -> dict:
         return mission_summary(self, ok, reason)

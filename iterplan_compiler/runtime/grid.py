@@ -119,7 +119,7 @@ class GridMap:
     cols: int
     rows: int
     cell_size: float = 50.0
-    cells: np.ndarray = field(default=None)  # type: ignore[assignment]
+    cells: np.ndarray = field(default=None)  # type: ignore[assignment,arg-type]
     home: tuple[float, float] = (0.0, 0.0)
     altitude: float = 60.0
     arrival_heading: float = math.pi / 2  # math radians; default: arrive flying north

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from pydantic import ValidationError
@@ -248,7 +249,7 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
         raise schema_error(label, exc) from None
     except RecursionError:
         raise MapError(f"{label}: the map is nested too deeply") from None
-    kw = dict(name=m.name, altitude=m.altitude,
+    kw: dict[str, Any] = dict(name=m.name, altitude=m.altitude,
               arrival_heading=compass_to_math(m.arrival_heading))
     if m.polygon is not None:
         ring = m.polygon.coordinates[0] if isinstance(m.polygon, _GPolygon) else m.polygon
@@ -262,19 +263,38 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
         grid = GridMap.from_size(m.cols, m.rows, m.cell_size, origin, **kw)
     else:
         raise MapError(f"{label}: $: map needs one of 'polygon', 'bbox' or 'cols'+'rows'")
-    if isinstance(m.home, _HomeCell):
+    _set_home(grid, m.home, label)
+    _load_sensors(grid, data, label, base)
+    try:
+        grid.dynamic, grid.derived = parse_sensor_rules(data, grid.sensors)
+    except MapError as exc:
+        import re
+
+        found = re.match(r"(dynamic|derived) sensor '([^']*)'", str(exc))
+        where = json_path((found[1], found[2])) if found else "$"
+        raise MapError(f"{label}: {where}: {exc}") from None
+    return grid
+
+
+def _set_home(grid: GridMap, home: Any, label: str) -> None:
+    """The launch point: a cell name, [lat, lon], or the first location's centre."""
+    if isinstance(home, _HomeCell):
         try:
-            cid = parse_cell_name(grid, m.home.cell)
+            cid = parse_cell_name(grid, home.cell)
         except ValueError:
-            raise MapError(f"{label}: $.home.cell: {m.home.cell!r} is not a cell name such as "
+            raise MapError(f"{label}: $.home.cell: {home.cell!r} is not a cell name such as "
                            "'A1'") from None
         if cid < 0:
-            raise MapError(f"{label}: $.home.cell: home cell {m.home.cell} is outside the map")
+            raise MapError(f"{label}: $.home.cell: home cell {home.cell} is outside the map")
         grid.home = grid.centre(cid)
-    elif m.home is not None:
-        grid.home = grid.to_enu(m.home[0], m.home[1])
+    elif home is not None:
+        grid.home = grid.to_enu(home[0], home[1])
     else:
         grid.home = grid.centre(int(grid.cells[0]))
+
+
+def _load_sensors(grid: GridMap, data: dict, label: str, base: Path) -> None:
+    """The map's ``sensors``: cell sets, relative files from ``base``."""
     for name, spec in (data.get("sensors") or {}).items():
         where = f"{label}: {json_path(('sensors', name))}"
         try:
@@ -285,15 +305,6 @@ def load_map(path: str | Path | None = None, data: dict | None = None) -> GridMa
             raise MapError(f"{where}: the geometry covers no cell of the map (check the "
                            "coordinates: GeoJSON is [lon, lat])")
         grid.set_sensor(str(name), ids)
-    try:
-        grid.dynamic, grid.derived = parse_sensor_rules(data, grid.sensors)
-    except MapError as exc:
-        import re
-
-        m = re.match(r"(dynamic|derived) sensor '([^']*)'", str(exc))
-        where = json_path((m[1], m[2])) if m else "$"
-        raise MapError(f"{label}: {where}: {exc}") from None
-    return grid
 
 
 def _checked_grid(label: str, key: str, make) -> GridMap:

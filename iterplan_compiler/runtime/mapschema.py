@@ -40,8 +40,11 @@ _Int = Annotated[int, Field(strict=True)]
 _Str = Annotated[str, Field(strict=True, max_length=10_000)]
 
 
-def _finite(lo: float | None = None, hi: float | None = None, *, gt: float | None = None):
-    return Annotated[float, Field(strict=True, allow_inf_nan=False, ge=lo, le=hi, gt=gt)]
+# finite floats in a range (NaN and Infinity rejected)
+_Fraction = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0.0, le=1.0)]
+_CellSize = Annotated[float, Field(strict=True, allow_inf_nan=False, le=100_000.0, gt=0.0)]
+_Altitude = Annotated[float, Field(strict=True, allow_inf_nan=False, le=10_000.0, gt=0.0)]
+_Compass = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=-360.0, le=360.0)]
 
 
 class _Strict(BaseModel):
@@ -151,7 +154,7 @@ class _Rect(_Strict):
 
 
 class _Random(_Strict):
-    random: _finite(0.0, 1.0)
+    random: _Fraction
     seed: Annotated[int, Field(strict=True, ge=0, le=2**63 - 1)] = 0
 
 
@@ -223,15 +226,15 @@ _PolygonArea = Annotated[
 class _MapFile(_Strict):
     name: Annotated[str, Field(strict=True, max_length=200)] = "map"
     description: _Str | None = None
-    cell_size: _finite(hi=100_000.0, gt=0.0) = 50.0
+    cell_size: _CellSize = 50.0
     origin: _LatLon | None = None
     cols: Annotated[int, Field(strict=True, gt=0, le=MAX_MAP_CELLS)] | None = None
     rows: Annotated[int, Field(strict=True, gt=0, le=MAX_MAP_CELLS)] | None = None
     bbox: tuple[_Lat, _Lon, _Lat, _Lon] | None = None  # south, west, north, east
     polygon: _PolygonArea | None = None
     home: _Home | None = None
-    altitude: _finite(hi=10_000.0, gt=0.0) = 60.0
-    arrival_heading: _finite(-360.0, 360.0) = 0.0
+    altitude: _Altitude = 60.0
+    arrival_heading: _Compass = 0.0
     sensors: dict[Annotated[str, Field(strict=True, min_length=1, max_length=200)],
                   _CellSet] | None = None
     # the sensor rules' semantics (and messages) are parse_sensor_rules'; typed here as objects
@@ -269,8 +272,8 @@ class _PathError(ValueError):
         self.message = message
 
 
-_MAP_ADAPTER = TypeAdapter(_MapFile)
-_GEOJSON_ADAPTER = TypeAdapter(_GeoJSON)
+_MAP_ADAPTER: TypeAdapter[_MapFile] = TypeAdapter(_MapFile)
+_GEOJSON_ADAPTER: TypeAdapter[Any] = TypeAdapter(_GeoJSON)
 
 
 def json_path(loc: Sequence[Any]) -> str:
@@ -330,7 +333,7 @@ def schema_error(label: str, exc: ValidationError) -> MapError:
         if path in seen:
             continue
         seen.add(path)
-        lines.append(f"{label}: {path}: {_message(err)}")
+        lines.append(f"{label}: {path}: {_message(dict(err))}")
         if len(lines) == 3:
             break
     extra = exc.error_count() - len(lines)

@@ -63,7 +63,7 @@ class Sensors:
 def static_sensors(bindings: Mapping[str, Binding]) -> Sensors:
     labels = tuple(sorted(a for a, b in bindings.items()
                           if b.kind == "sensor.next" and b.mask is not None))
-    masks = tuple(bindings[a].mask for a in labels)  # type: ignore[misc]
+    masks = tuple(np.asarray(bindings[a].mask) for a in labels)
     return Sensors(labels, masks)
 
 

@@ -198,6 +198,12 @@ def _inner(dst: np.ndarray, vx: np.ndarray, vy: np.ndarray, n2: np.ndarray, thet
     np.fmin(dst, g, out=dst)
 
 
+# Geometry, in the start frame (start at the origin, heading 0; target p, arrival angle b):
+# start circles Ls = (0, r), Rs = (0, -r); goal circles A = p + r(-sin b, cos b) (left of the
+# arrival heading) and B = p - r(-sin b, cos b).  The four centre-to-centre vectors u = A - Ls,
+# v = B - Rs, w = B - Ls, z = A - Rs carry all eight words of both arrival directions, because
+# b + pi swaps A and B: LSL/RSR/LSR/RSL(b) use u/v/w/z and (b + pi) uses w/z/u/v.  So
+# ``parallel`` shares the rotation, the vectors and their squared norms.
 def dubins_lengths(start: Pose, xs: np.ndarray, ys: np.ndarray, arrival_heading: float,
                    radius: float, *, parallel: bool = False, chunk: int = CHUNK,
                    return_flip: bool = False):
@@ -207,13 +213,7 @@ def dubins_lengths(start: Pose, xs: np.ndarray, ys: np.ndarray, arrival_heading:
     With ``return_flip`` also returns a bool array: True where arriving with
     ``arrival_heading + pi`` is the shorter choice.  Pure function; ``xs``/``ys`` any float dtype
     (float32 avoids a conversion pass).
-
-    Geometry, in the start frame (start at the origin, heading 0; target p, arrival angle b):
-    start circles Ls = (0, r), Rs = (0, -r); goal circles A = p + r(-sin b, cos b) (left of the
-    arrival heading) and B = p - r(-sin b, cos b).  The four centre-to-centre vectors u = A - Ls,
-    v = B - Rs, w = B - Ls, z = A - Rs carry all eight words of both arrival directions, because
-    b + pi swaps A and B: LSL/RSR/LSR/RSL(b) use u/v/w/z and (b + pi) uses w/z/u/v.  So
-    ``parallel`` shares the rotation, the vectors and their squared norms.
+    The geometry is in the comment above.
     """
     n = len(xs)
     out = np.empty(n, dtype=np.float32)
@@ -279,7 +279,7 @@ def dubins_lengths(start: Pose, xs: np.ndarray, ys: np.ndarray, arrival_heading:
                             first = False
                     else:
                         _inner(dst, vx, vy, n2, theta, r, f, m)
-            if return_flip:
+            if flip is not None:
                 np.less(best2, best, out=flip[i:i + k])
                 np.fmin(best, best2, out=best)
     return (out, flip) if return_flip else out
