@@ -37,7 +37,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--start", choices=("auto", "ground", "airborne"), default="auto",
                         help="take off from the ground, take over a flying vehicle, or pick by "
                              "what the vehicle reports (default)")
-    parser.add_argument("--sorter", choices=("distance", "last", "random"), default="distance")
+    parser.add_argument("--sorter", choices=("distance", "last", "random", "tour"),
+                        default="distance",
+                        help="order of the locations: the paper's distance (greedy Dubins), "
+                             "last, random; or tour (a planned tour over the cells the map's "
+                             "sensors mark, docs/runtime.md)")
+    parser.add_argument("--headings", choices=("parallel", "grid"), default="parallel",
+                        help="admissible arrival headings: parallel to the map's direction "
+                             "(the paper's), or along either grid axis")
+    parser.add_argument("--heading-choice", choices=("shortest", "lookahead"),
+                        default="shortest",
+                        help="arrival heading per leg: the shortest path (the paper's) or the "
+                             "one that also shortens the next leg (the tour's planned heading "
+                             "with --sorter tour)")
     parser.add_argument("--seed", type=int, default=0, help="seed for the random sorter and sim")
     parser.add_argument("--ideal-compute", action="store_true",
                         help="do not charge planning compute time to the simulated clock")
@@ -103,7 +115,9 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
     from iterplan_compiler.runtime.grid import MapError, load_map
     from iterplan_compiler.runtime.parm import ParmError, read_parm
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
     from iterplan_compiler.runtime.runfiles import check_out, parse_until, until_hook, write_outputs
+    from iterplan_compiler.runtime.sorter import SorterKind
     from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
 
     def err(msg: str) -> int:
@@ -180,7 +194,10 @@ def run(args: argparse.Namespace) -> int:
                 vehicle = MavlinkVehicle.connect(args.connect, grid.frame, link,
                                                  progress=progress)
                 mode = args.planner or "carrot"
-            cfg = RunConfig(sorter=args.sorter, seed=args.seed, ideal_compute=args.ideal_compute,
+            cfg = RunConfig(sorter=SorterKind(args.sorter),
+                            headings=ArrivalHeadings(args.headings),
+                            heading_choice=HeadingChoice(args.heading_choice),
+                            seed=args.seed, ideal_compute=args.ideal_compute,
                             passes=passes, max_time=args.max_time, max_wall=args.max_time,
                             planner_mode=mode, wind=wind_margin, altitude=altitude,
                             turn_radius=args.turn_radius, start=Start(args.start),
