@@ -124,7 +124,7 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     # Each finished run is appended to <name>.partial.csv at once (one fsync-ed line), so a
     # sweep killed after hours resumes where it stopped: runs already in the file are kept.
     partial = out / f"{name}.partial.csv"
-    fields = harness.CASE_FIELDS + harness.RESULT_FIELDS
+    fields = harness.CASE_FIELDS + harness.RESULT_FIELDS + ["floor", "physics_pct"]
     final = out / f"{name}.csv"
     done_rows = [] if args.fresh else _resumable_rows(partial, fields) + \
         _finished_rows(final, fields)
@@ -235,14 +235,15 @@ def _summary_text(name: str, points) -> str:
     unit = "overhead %" if name == "fig3c" else "duration s"
     lines = [f"{name}: mean ± 3 SEM ({unit}), ideal s, overhead %",
              f"{'universe':>9} {'count':>5} {'sorter':<8} {'n':>3} {'value':>18} "
-             f"{'ideal':>9} {'overhead':>9}"]
+             f"{'ideal':>9} {'overhead':>9} {'physics floor':>16}"]
     for p in points:
         if name == "fig3c":
             val = f"{p.overhead_pct:8.1f} ± {p.overhead_err3:6.1f}"
         else:
             val = f"{p.duration:8.1f} ± {p.duration_err3:6.1f}"
         lines.append(f"{p.universe:>9} {p.count:>5} {p.sorter:<8} {p.n:>3} {val:>18} "
-                     f"{p.ideal:9.1f} {p.overhead_pct:8.1f}%")
+                     f"{p.ideal:9.1f} {p.overhead_pct:8.1f}% "
+                     f"{p.physics_pct:7.1f} ± {p.physics_err3:5.1f}%")
     return "\n".join(lines)
 
 

@@ -177,6 +177,9 @@ class Point:
     overhead_pct: float
     overhead_err3: float
     failed: int
+    #: the kinematic floor over the ideal (%): what the turn radius costs at least
+    physics_pct: float = math.nan
+    physics_err3: float = math.nan
 
 
 def aggregate(rows: Iterable[dict]) -> list[Point]:
@@ -191,10 +194,19 @@ def aggregate(rows: Iterable[dict]) -> list[Point]:
         d = summarize(float(r["duration"]) for r in ok)
         o = summarize(float(r["overhead_pct"]) for r in ok)
         ideal = summarize(float(r["ideal"]) for r in ok).mean
+        ph = summarize(_num(r.get("physics_pct")) for r in ok)
         points.append(Point(key[0], key[1], key[2], key[3], n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
                             overhead_pct=o.mean, overhead_err3=o.err3,
-                            failed=len(rs) - len(ok)))
+                            failed=len(rs) - len(ok), physics_pct=ph.mean,
+                            physics_err3=ph.err3))
     return points
+
+
+def _num(v: object) -> float:
+    try:
+        return float(v)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def write_summary_csv(points: Sequence[Point], path: Path | None = None) -> str:

@@ -128,6 +128,41 @@ def preflight(experiment: str, ctrl_dir: Path) -> str | None:
     return None
 
 
+def kinematic_floor_s(case: Case, res, grid, radius: float) -> float:
+    """The measurement's kinematic floor (s): what the same mission costs at least with the
+    turn radius (runtime/ideal.py).  Patrol: the periodic loop through the patrol cells in
+    order; Cover: from the pose at the first ``has.next``, the shorter of the order flown and
+    the ideal's order, each with the best arrival headings (either way along the map's
+    direction).  At the planned airspeed, like the ideal."""
+    import numpy as np
+
+    from iterplan_compiler.runtime.ideal import ideal_path, kinematic_floor
+    from iterplan_compiler.runtime.sorter import Pose
+    from iterplan_compiler.runtime.tour import dubins_order_length
+
+    h = grid.arrival_heading
+    if case.experiment == "fig3b":
+        pts = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
+        return kinematic_floor(pts, list(range(len(pts))), None, h, radius,
+                               closed=True) / res.speed
+    region = {int(c) for c in grid.sensors["cover"]}
+    start = next(e for e in res.log if e.label == "has.next")
+    tr = np.asarray(res.track, dtype=np.float64).reshape(-1, 3)
+    k = int(np.clip(np.searchsorted(tr[:, 0], start.t), 1, len(tr) - 1))
+    course = math.atan2(tr[k, 2] - tr[k - 1, 2], tr[k, 1] - tr[k - 1, 1])
+    pose = Pose(start.x, start.y, course)
+    flown, seen = [], set()
+    for e in res.log:
+        if e.label == "arrived" and e.cell in region and e.cell not in seen:
+            seen.add(e.cell)
+            flown.append(grid.centre(e.cell))
+    pts = np.asarray(flown, dtype=np.float64)
+    best = ideal_path(pts, (start.x, start.y))
+    orders = [list(range(len(pts)))] + ([list(best.order)] if best.order else [])
+    heads = (h, h + math.pi)
+    return min(dubins_order_length(pts[o], pose, heads, radius) for o in orders) / res.speed
+
+
 class VehicleKind(enum.Enum):
     """The simulated aircraft of the sweeps."""
 
@@ -187,4 +222,6 @@ class Runner:
         out["compute_s"] = float(res.summary.get("compute_s", 0.0) or 0.0)
         out["steps"] = int(res.summary.get("steps", 0) or 0)
         out["turn_radius"] = float(res.summary.get("turn_radius_m", 0.0) or 0.0)
+        out["floor"] = kinematic_floor_s(case, res, grid, out["turn_radius"])
+        out["physics_pct"] = 100.0 * (out["floor"] - out["ideal"]) / out["ideal"]
         return out

@@ -82,6 +82,11 @@ from iterplan_compiler.runtime.vehicle import (
 )
 
 
+#: Bindings through which the controller observes or moves the Iterator.
+ITERATOR_KINDS = frozenset({"has.next", "remove.next", "reset", "go.next", "sensor.next",
+                            "custom"})
+
+
 class Executor:
     """Runs ``table`` on ``vehicle`` over ``grid``; see the module docstring."""
 
@@ -111,6 +116,7 @@ class Executor:
         self._mark = self.cfg.compute_clock()   # start of the current think period
         self.t0 = vehicle.time
         self.start_pose: Pose | None = None   # where the mission proper began
+        self._iterator_seen = False   # has the controller used the Iterator yet?
         self._waiting: dict[str, str] = {}    # vehicle/planner event kind -> answer label
         self._pending: deque[str] = deque()
         self._next_progress = 0.0
@@ -274,6 +280,11 @@ class Executor:
             self.log_entry("v", f"{e.kind} {e.detail}".strip())
             if e.kind in FAULTS:
                 raise MissionEnd(False, f"{e.kind}: {e.detail}")
+            if e.kind == "takeoff_complete" and not self._iterator_seen:
+                # The controller's own take-off: nothing of the Iterator has been observed
+                # yet, so order it from where the mission really starts (not the launch pad)
+                p = self.vehicle.pose()
+                self.iterator.reset(Pose(p.x, p.y, p.course))
             if e.kind in self._waiting:
                 self._pending.append(self._waiting.pop(e.kind))
 
@@ -416,6 +427,8 @@ class Executor:
                 label = cfg.choose(enabled) if cfg.choose else enabled[0]
                 ctrl.step(label)
                 b: Binding = bindings[label]
+                if not self._iterator_seen and b.kind in ITERATOR_KINDS:
+                    self._iterator_seen = True
                 if len(log) < log_limit:
                     self.log_entry("c", label)
                 if on_event is not None and on_event("c", label):
