@@ -36,9 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quick", action="store_true",
                         help="small sizes (seconds; what CI runs)")
     parser.add_argument("--seeds", type=int, default=None,
-                        help="runs per point (default: the paper's: 30 for fig3b, 6 for Cover)")
+                        help="runs per point (default 30)")
     parser.add_argument("--sorters", default=None,
-                        help="comma-separated subset of distance,last,random")
+                        help="comma-separated subset of distance,last,random,tour")
     parser.add_argument("--sizes", default=None,
                         help="comma-separated sizes to run instead of the defaults: numbers of "
                              "locations (fig3b, fig3d) or of locations to cover (fig3c)")

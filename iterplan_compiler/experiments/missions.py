@@ -151,16 +151,17 @@ def kinematic_floor_s(case: Case, res, grid, radius: float) -> float:
     k = int(np.clip(np.searchsorted(tr[:, 0], start.t), 1, len(tr) - 1))
     course = math.atan2(tr[k, 2] - tr[k - 1, 2], tr[k, 1] - tr[k - 1, 1])
     pose = Pose(start.x, start.y, course)
-    flown, seen = [], set()
+    flown: list[tuple[float, float]] = []
+    seen: set[int] = set()
     for e in res.log:
         if e.label == "arrived" and e.cell in region and e.cell not in seen:
             seen.add(e.cell)
             flown.append(grid.centre(e.cell))
-    pts = np.asarray(flown, dtype=np.float64)
-    best = ideal_path(pts, (start.x, start.y))
-    orders = [list(range(len(pts)))] + ([list(best.order)] if best.order else [])
+    arr = np.asarray(flown, dtype=np.float64).reshape(-1, 2)
+    best = ideal_path(arr, (start.x, start.y))
+    orders = [list(range(len(arr)))] + ([list(best.order)] if best.order else [])
     heads = (h, h + math.pi)
-    return min(dubins_order_length(pts[o], pose, heads, radius) for o in orders) / res.speed
+    return min(dubins_order_length(arr[o], pose, heads, radius) for o in orders) / res.speed
 
 
 class VehicleKind(enum.Enum):

@@ -2,8 +2,9 @@
 
 A :class:`Case` is one simulated mission: an experiment name, the number of locations in the
 iterator (the *universe*), the number of locations to cover (Cover only), a sorter and a seed.
-Full sizes follow the paper (Ordered Patrol up to 700,000 locations, 30 runs per point; Cover
-with a 713-location universe, 6 runs per point; Cover of 61 locations for growing universes);
+Full sizes follow the paper (Ordered Patrol up to 700,000 locations; Cover with a 713-location
+universe; Cover of 61 locations for growing universes), 30 runs per point (the paper: 6 for
+Cover); what a seed varies is :func:`layout`;
 ``quick`` sizes are small enough for CI.
 """
 

@@ -81,7 +81,6 @@ from iterplan_compiler.runtime.vehicle import (
     planning_radius,
 )
 
-
 #: Bindings through which the controller observes or moves the Iterator.
 ITERATOR_KINDS = frozenset({"has.next", "remove.next", "reset", "go.next", "sensor.next",
                             "custom"})
