@@ -50,6 +50,10 @@ def run(args: argparse.Namespace) -> int:
     if getattr(args, "print_fsp", False):
         return _print(args.spec)
     model, diags, sources = load_with_sources(args.spec)
+    if model is not None and not has_errors(diags):
+        from iterplan_compiler.commands.semantic_checks import run_all
+
+        diags += run_all(model)
     if model is not None and args.build:
         for name in model.own_names():
             _, ds = model.build_lts(name)

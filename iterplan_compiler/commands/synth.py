@@ -59,6 +59,10 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.synthesis.driver import synthesize
 
     model, diags, sources = load_with_sources(args.spec)
+    if model is not None and not has_errors(diags):  # e.g. `ltl_property L = []<> land`
+        from iterplan_compiler.commands.semantic_checks import safety_of_formulas
+
+        diags += safety_of_formulas(model)
     if diags:
         print(render(diags, sources), file=sys.stderr)
     if model is None or has_errors(diags):
