@@ -20,8 +20,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", choices=("symbolic", "explicit"), default="symbolic",
                         help="symbolic BDD solver (default) or MTSA's explicit rank solver")
     parser.add_argument("--explain", action="store_true",
-                        help="for an unrealizable spec, print losing states and a "
-                             "counter-strategy trace")
+                        help="for an unrealizable spec, print the environment's winning play "
+                             "(actions and fluent values: the step that breaks a safety "
+                             "property, or the loop that keeps a guarantee false)")
     parser.add_argument("--order",
                         choices=("clustered", "action_first", "action_last", "blocked"),
                         default="clustered", help="BDD variable order (symbolic solver)")

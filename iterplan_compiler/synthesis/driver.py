@@ -175,9 +175,10 @@ def _fluent_only_actions(spec: GameSpec) -> frozenset[str]:
 
 def _explain(spec: GameSpec, game: _explicit.ExplicitGame, win: frozenset[int],
              explain: bool) -> str:
+    from iterplan_compiler.synthesis.explain import explain_losing, losing_count, losing_head
+
     if not explain:
-        return "unrealizable: the initial state is not winning"
-    from iterplan_compiler.synthesis.explain import explain_losing
+        return losing_head(*losing_count(game, win))
 
     try:
         return explain_losing(spec, game, win)
