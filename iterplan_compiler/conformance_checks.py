@@ -266,7 +266,7 @@ def never_fails(composite: str) -> Check:
 
     def run(ctx: Context) -> CheckResult:
         if composite not in ctx.model.names():
-            return CheckResult(name, Status.PASS, "no such composite (MTSA only prints)")
+            return CheckResult(name, Status.ERROR, "no such composite in the file")
         lts, diags = ctx.build(composite, unrealizable="plant")
         got = first_error(diags) or (f"{lts.num_states} states" if lts is not None else "")
         return CheckResult(name, Status.PASS, got)

@@ -138,6 +138,10 @@ ROWS = [
     ("game.lts", "realizable", "DirectedController",
      "composition!=null & ntransitions>0; assert Check holds on ||Sys"),
     ("game.lts", "realizable", "Plant", "composition!=null"),
+    ("bad.lts", "compiles (errors only printed, never fail)", "C",
+     'MTSCompiler.compileCompositeState("C")'),
+    ("mts.lts", "compiles (errors only printed, never fail)", "C",
+     'MTSCompiler.compileCompositeState("C")'),
 ]
 
 
@@ -170,6 +174,8 @@ def test_strict_statuses(tmp_path: Path):
         ("ok.lts::D", "error"),           # unrecognised check clause
         ("game.lts::DirectedController", "pass"),
         ("game.lts::Plant", "error"),     # not a synthesis composite: no verdict, no pass
+        ("bad.lts::C", "pass"),           # MTSA's ParserTests only print errors
+        ("mts.lts::C", "unsupported"),    # ... but what we reject on purpose stays unsupported
     ]
 
 
