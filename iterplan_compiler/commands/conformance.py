@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--write-baseline", type=Path, default=None,
                         help="write the statuses of this run as a new baseline")
     parser.add_argument("-v", "--verbose", action="store_true",
-                        help="print every row, not only those that do not pass")
+                        help="also print the detail of checks that pass")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,18 +46,16 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
 
     def show(res: conf.RowResult) -> None:
+        """Every row with every check and its status; details of the checks that do not
+        pass (of all checks with -v)."""
         nonlocal done
         done += 1
-        if args.verbose or res.status != "pass":
-            print(f"[{done:>3}/{len(rows)}] {res.status:<11} {res.key} ({res.seconds:.1f} s)",
-                  flush=True)
-            for check in res.checks:
-                print(f"      {check.status.value:<11} {check.name}"
-                      + (f": {check.detail}" if check.detail else ""), flush=True)
-            if not res.checks:
-                print(f"      {res.detail}", flush=True)
-        elif done % 25 == 0:
-            print(f"[{done:>3}/{len(rows)}] ...", flush=True)
+        names = "; ".join(f"{c.name}: {c.status.value}" for c in res.checks) or res.detail
+        print(f"[{done:>3}/{len(rows)}] {res.status:<11} {res.key} ({res.seconds:.1f} s) "
+              f"{names}", flush=True)
+        for check in res.checks:
+            if check.detail and (args.verbose or check.status.value != "pass"):
+                print(f"      {check.status.value:<11} {check.name}: {check.detail}", flush=True)
 
     results = conf.run_corpus(root, rows, jobs=args.jobs, timeout=args.timeout,
                               budget=args.budget, on_result=show)

@@ -8,15 +8,17 @@ numbers):
   safety property; a deadlock; a controller state without a controllable move), the shortest
   forcing play, each controller step with all its alternatives (they all lose), ending with the
   step that breaks the property, named;
-* **liveness** — otherwise a guarantee ``G_j`` the environment can keep false forever: the
-  largest set of losing ``¬G_j`` states where the environment can stay and still make every
-  assumption ``A_i`` hold again and again (a generalised Büchi game for the environment).  The
-  play is a lasso: a forcing prefix into that set, then a loop, closed when a (state, next
-  assumption) pair repeats, with each assumption visit marked; with no assumptions the loop just
-  avoids the guarantee;
-* if no single guarantee can be kept false (the environment must switch which one it blocks,
-  a strategy that needs memory this module does not reconstruct), the head and the distinct
-  fluent valuations of a few losing states.
+* **liveness** — otherwise the environment's layered strategy (the dual of the GR(1)
+  fixpoint): layer 0 forces ERROR; each further layer is forced into the layers below or into
+  a *core* where the environment keeps one guarantee ``G_j`` false while making every
+  assumption ``A_i`` hold again and again (a generalised Büchi game for the environment).
+  Played against a curious controller, the play is a lasso: a prefix (in which the environment
+  may switch the guarantee it blocks as the controller's choices require), then a loop in one
+  core, closed when a (state, guarantee, next assumption) triple repeats, with the loop steps
+  after which each assumption holds; with no assumptions the text says so.  If the
+  controller's choices lead into layer 0 the play ends with the step that breaks a property;
+* a last resort (the layers always reach the initial state of a losing game; kept for
+  safety): the head and the distinct fluent valuations of a few losing states.
 
 Counts are of reachable non-ERROR game states, as both solvers report them (:func:`losing_head`).
 """
@@ -195,15 +197,18 @@ def _env_can_stay(game: ExplicitGame, s: int, Z: set[int],
 
 
 def _env_buchi(game: ExplicitGame, region: set[int], assumptions: list[frozenset[int]],
-               avoid: frozenset[int] = frozenset()) -> set[int]:
-    """Largest ``Z ⊆ region`` where the environment can stay forever and force a visit to
-    every assumption set again and again (generalised Büchi for the environment)."""
+               avoid: frozenset[int] = frozenset(), below: frozenset[int] = frozenset()
+               ) -> set[int]:
+    """Largest ``Z ⊆ region`` where the environment can stay forever (or move into
+    ``below``, where it already wins) and force a visit to every assumption set again and
+    again (generalised Büchi for the environment)."""
     Z = set(region)
     while True:
         new = set(Z)
+        ok = Z | below
         for a in assumptions:
-            target = {s for s in Z if s in a and _env_can_stay(game, s, Z, avoid)}
-            new &= set(_env_pre_layers(game, target, Z, avoid))
+            target = {s for s in Z if s in a and _env_can_stay(game, s, ok, avoid)} | below
+            new &= set(_env_pre_layers(game, target, ok, avoid))
         if new == Z:
             return Z
         Z = new
@@ -267,79 +272,152 @@ def _with_note(st: Step, note: str) -> Step:
     return Step(st.state, st.action, st.target, st.by_controller, st.alternatives, joined)
 
 
-def _lasso(game: ExplicitGame, core: set[int], start: int, avoid: frozenset[int]
-           ) -> tuple[list[Step], int]:
-    """The environment's play inside ``core`` from ``start``: the steps and the index where
-    the loop starts.  The environment heads for the next assumption it owes (``stay``s once
-    all hold); the controller, to show more than a stall, takes a move to a state the play has
-    not seen yet when it has one (an action it has not played yet first).  Each choice is fixed at the first visit of its (state, next
-    assumption) pair, so the play closes into a loop as soon as such a pair repeats."""
-    targets = [{t for t in core if t in a and _env_can_stay(game, t, core, avoid)}
-               for a in game.assumptions]
-    layers = [_env_pre_layers(game, tg, core, avoid) for tg in targets]
-    stay = {t: 0 for t in core}
-    steps: list[Step] = []
-    seen: dict[tuple[int, int], int] = {}
-    visited, played = {start}, set()
-    s, i = start, 0
-    while len(steps) < 4 * MAX_STEPS:
-        owed = 0
-        while s in targets[i] and owed < len(targets):
-            i, owed = (i + 1) % len(targets), owed + 1
-        if (s, i) in seen:
-            return steps, seen[(s, i)]
-        seen[(s, i)] = len(steps)
-        layer = stay if owed == len(targets) else layers[i]
-        st = _move(game, layer, s, allowed=core, avoid=avoid)
-        if st is None:
-            break
-        if st.by_controller:
-            fresh = sorted((a in played, a, t) for a, t in game.edges[s]
-                           if a in game.controllable and t in core and t not in visited
-                           and t not in avoid)
-            if fresh:
-                st = Step(s, fresh[0][1], fresh[0][2], True, st.alternatives)
-        steps.append(st)
-        visited.add(st.target)
-        played.add(st.action)
-        s = st.target
-    return steps, len(steps)
+@dataclass(frozen=True, slots=True)
+class _Layer:
+    """One round of the environment's winning region, built from the ones below it: in a
+    ``cores[j]`` state the environment keeps guarantee ``j`` false (or drops to ``below``)
+    while visiting every assumption; ``attr`` forces into ``below`` or a core."""
+
+    below: frozenset[int]
+    cores: dict[int, frozenset[int]]
+    attr: dict[int, int]
+
+
+def _layers(game: ExplicitGame, losing: set[int], avoid: frozenset[int]
+            ) -> tuple[dict[int, int], list[_Layer]]:
+    """``state -> layer`` and the layers of the environment's winning region (the dual of
+    the GR(1) fixpoint: ``μZ. ∨_j νY. ∧_i μX. ...`` for the environment)."""
+    dead = set(avoid)
+    safety = _env_pre_layers(game, dead, losing | dead)  # layer 0: the environment forces ERROR
+    rank = {s: 0 for s in safety}
+    layers = [_Layer(frozenset(), {}, safety)]
+    below = set(safety)
+    while True:
+        cores = {}
+        for j, g in enumerate(game.guarantees):
+            core = _env_buchi(game, losing - (g | game.failures) - below, game.assumptions,
+                              avoid, frozenset(below))
+            if core:
+                cores[j] = frozenset(core)
+        attr = _env_pre_layers(game, below.union(*cores.values()), losing, avoid)
+        new = set(attr) - below
+        if not new:
+            return rank, layers
+        for s in new:
+            rank[s] = len(layers)
+        layers.append(_Layer(frozenset(below), cores, attr))
+        below |= new
+
+
+class _Play:
+    """The environment's layered strategy played against a curious controller (it takes a
+    move to a state the play has not seen, an action it has not played first).  Every choice
+    depends on (state, guarantee kept false, next assumption owed) only, so the play closes
+    into a loop as soon as that triple repeats; layers never go up, so the loop lies in one
+    core and keeps its guarantee false."""
+
+    def __init__(self, game: ExplicitGame, rank: dict[int, int], layers: list[_Layer],
+                 avoid: frozenset[int]) -> None:
+        self.game, self.rank, self.layers, self.avoid = game, rank, layers, avoid
+        self._towards: dict[tuple[int, int, int], tuple[set[int], dict[int, int]]] = {}
+
+    def towards(self, k: int, j: int, i: int) -> tuple[set[int], dict[int, int]]:
+        """Targets of assumption ``i`` in core ``j`` of layer ``k`` and the attractor."""
+        if (k, j, i) not in self._towards:
+            L = self.layers[k]
+            ok = set(L.cores[j] | L.below)
+            target = {t for t in L.cores[j] if t in self.game.assumptions[i]
+                      and _env_can_stay(self.game, t, ok, self.avoid)}
+            self._towards[(k, j, i)] = (target, _env_pre_layers(
+                self.game, target | set(L.below), ok, self.avoid))
+        return self._towards[(k, j, i)]
+
+    def run(self, start: int) -> tuple[list[Step], int, list[int]]:
+        """The steps, where the loop starts, and the guarantee kept false before each step."""
+        game, n = self.game, len(self.game.assumptions)
+        steps: list[Step] = []
+        kept: list[int] = []
+        seen: dict[tuple[int, int, int], int] = {}
+        visited, played = {start}, set()
+        s, i, j = start, 0, -1
+        while len(steps) < 4 * MAX_STEPS:
+            L = self.layers[self.rank[s]]
+            if s not in L.cores.get(j, frozenset()):
+                j = min((c for c, core in L.cores.items() if s in core), default=-1)
+            owed = 0
+            if j >= 0:
+                while s in self.towards(self.rank[s], j, i)[0] and owed < n:
+                    i, owed = (i + 1) % n, owed + 1
+            if (s, j, i) in seen:
+                return steps, seen[(s, j, i)], kept
+            seen[(s, j, i)] = len(steps)
+            if j < 0:
+                allowed, layer = None, L.attr
+            else:
+                allowed = set(L.cores[j] | L.below)
+                layer = ({t: 0 for t in allowed} if owed == n
+                         else self.towards(self.rank[s], j, i)[1])
+            st = _move(game, layer, s, allowed=allowed, avoid=self.avoid)
+            if st is None:
+                break
+            if st.by_controller:
+                fresh = sorted((a in played, a, t) for a, t in game.edges[s]
+                               if a in game.controllable and t not in visited
+                               and t not in self.avoid and t in self.rank
+                               and (allowed is None or t in allowed))
+                if fresh:
+                    st = Step(s, fresh[0][1], fresh[0][2], True, st.alternatives)
+            steps.append(st)
+            kept.append(j)
+            visited.add(st.target)
+            played.add(st.action)
+            s = st.target
+        return steps, len(steps), kept
 
 
 def _liveness_play(spec: GameSpec, game: ExplicitGame, losing: set[int], dead: set[int]
                    ) -> list[str] | None:
-    """The lasso keeping one guarantee false forever, or ``None`` if none can be kept false."""
+    """The lasso keeping one guarantee false forever, or ``None`` if the layers do not reach
+    the initial state."""
     avoid = frozenset(dead)
-    for j, g in enumerate(game.guarantees):
-        core = _env_buchi(game, losing - (g | game.failures) - dead, game.assumptions, avoid)
-        attr = _env_pre_layers(game, core, losing, avoid) if core else {}
-        if game.initial not in attr:
-            continue
-        goal = show_formula(spec.guarantees[j]) if j < len(spec.guarantees) else "true"
-        prefix, entry = _forcing_prefix(game, attr, game.initial, core, avoid)
-        loop, at = _lasso(game, core, entry, avoid)
-        steps = prefix + loop
-        if spec.assumptions:
-            owed = ", ".join(show_formula(a) for a in spec.assumptions)
-            head = (f"the environment keeps guarantee {goal} false forever (a liveness loss), "
-                    f"while making every assumption hold again and again ({owed}):")
-        else:
-            head = (f"the environment keeps guarantee {goal} false forever (a liveness loss; "
-                    "the spec has no assumptions that would rule this play out):")
-        p = Printer(spec, game)
-        out = [head, p.initially()]
-        cut = len(prefix) + at
-        for n, st in enumerate(steps, 1):
-            if n - 1 == cut:
-                out.append("  then, forever:")
-            out.append(p.step(n, st))
-        for name, a in zip((show_formula(f) for f in spec.assumptions), game.assumptions):
-            where = [str(n) for n, st in enumerate(steps, 1) if n > cut and st.target in a]
-            out.append(f"  assumption {name} holds in the loop after step(s) {', '.join(where)}")
-        out.append(f"  ... and the loop repeats: {goal} never holds, so the guarantee is "
-                   "never reached.")
-        return out
-    return None
+    rank, layers = _layers(game, losing - dead, avoid)
+    if game.initial not in rank:
+        return None
+    steps, cut, kept = _Play(game, rank, layers, avoid).run(game.initial)
+    name = {j: show_formula(g) for j, g in enumerate(spec.guarantees)}
+    p = Printer(spec, game)
+    if steps and steps[-1].target in dead:
+        # the controller's choices led into the safety attractor: the play ends in a dead end
+        steps[-1] = _with_note(steps[-1], _violation(spec, game, steps[-1]))
+        blocked = sorted({name[j] for j in kept if j in name})
+        head = ("the environment keeps " + (", ".join(blocked) or "the guarantees")
+                + " false as long as the controller tries, then forces a dead end:")
+        return [head, p.initially(), *(p.step(n, st) for n, st in enumerate(steps, 1)),
+                "  the last step ends the play (a violated property or a state without moves)."]
+    loop_j = kept[cut] if cut < len(kept) else -1
+    goal = name.get(loop_j, "true")
+    if spec.assumptions:
+        owed = ", ".join(show_formula(a) for a in spec.assumptions)
+        head = (f"the environment keeps guarantee {goal} false forever (a liveness loss), "
+                f"while making every assumption hold again and again ({owed}):")
+    else:
+        head = (f"the environment keeps guarantee {goal} false forever (a liveness loss; "
+                "the spec has no assumptions that would rule this play out):")
+    out = [head, p.initially()]
+    for n, st in enumerate(steps, 1):
+        if n - 1 == cut:
+            out.append("  then, forever:")
+        out.append(p.step(n, st))
+    others = sorted({name[j] for j in kept[:cut] if j >= 0 and j != loop_j and j in name})
+    if others:
+        out.append(f"  (before the loop it keeps {', '.join(others)} false instead, until the "
+                   "controller's choices let it switch)")
+    for label, a in zip((show_formula(f) for f in spec.assumptions), game.assumptions):
+        where = [str(n) for n, st in enumerate(steps, 1) if n > cut and st.target in a]
+        out.append(f"  assumption {label} holds in the loop after step(s) {', '.join(where)}")
+    out.append(f"  ... and the loop repeats: {goal} never holds, so the guarantee is "
+               "never reached.")
+    return out
 
 
 def explain_losing(spec: GameSpec, game: ExplicitGame, win: frozenset[int]) -> str:

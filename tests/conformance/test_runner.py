@@ -234,3 +234,17 @@ def test_every_corpus_row_is_understood():
         assert row.family != cc.Family.UNKNOWN, row.key
         names = [c.name for c in cc.plan(row.expected, row.composites, row.checks)]
         assert not any(n in ("verdict", "check", "checks") for n in names), (row.key, names)
+
+
+def test_report_prints_every_row_with_every_check(tmp_path: Path, capsys):
+    from iterplan_compiler import cli
+
+    root = _corpus(tmp_path, ROWS[:3])
+    code = cli.main(["conformance", str(root), "-j", "1"])
+    out = capsys.readouterr().out
+    assert code == 0
+    lines = [line for line in out.splitlines() if line.startswith("[")]
+    assert len(lines) == 3
+    assert lines[1].endswith("builds C: pass; builds D: pass")
+    assert "builds Nope: error" in lines[2]
+    assert "      error       builds Nope: no such composite in the file" in out

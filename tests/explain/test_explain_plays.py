@@ -86,3 +86,61 @@ def test_early_stopped_fixpoint_is_recomputed_for_the_explanation():
     problem, _ = model.synthesis_problem("FirePatrol")
     res = synthesize(problem, solver="symbolic", explain=True)
     assert "(146 of 146 reachable game states are losing" in res.explanation
+
+
+CORPUS = REPO.parent.parent / "shared" / "conformance" / "mtsa"
+if not (CORPUS / "verdicts.tsv").is_file():
+    CORPUS = Path("/work/shared/conformance/mtsa")
+
+
+def _unrealizable_games():
+    from iterplan_compiler import conformance as conf
+
+    specs = [(VARIANTS / f"{n}.lts", "FirePatrol") for n in NAMES]
+    if (CORPUS / "verdicts.tsv").is_file():
+        specs += [(CORPUS / r.file, r.composites[0]) for r in conf.read_rows(CORPUS)
+                  if r.kind == "unrealizable"]
+    return specs
+
+
+@pytest.mark.parametrize("path,name", _unrealizable_games(),
+                         ids=lambda x: x.name if isinstance(x, Path) else x)
+def test_every_play_is_a_real_play(path, name):
+    """Each step is an edge of the game taken by its owner; a liveness play ends in a loop
+    that keeps its guarantee false and visits every assumption, or in a dead end."""
+    from iterplan_compiler.synthesis import explain as E
+    from iterplan_compiler.synthesis import explicit as X
+    from iterplan_compiler.synthesis.encode import prepare
+
+    model, _ = load(str(path))
+    problem, _ = model.synthesis_problem(name)
+    spec = prepare(problem)
+    game = X.build_game(spec)
+    ranks = X.solve_ranks(game)
+    win = frozenset(s for s in range(game.num_states) if ranks.winning(s))
+    assert game.initial not in win
+    n = game.num_states
+    dead = {s for s in range(n) if not game.edges[s]} | {
+        s for s in range(n)
+        if not game.env[s] and not any(a in game.controllable for a, _ in game.edges[s])}
+    text = E.explain_losing(spec, game, win)
+    assert "switching" not in text  # every corpus game gets a play
+    if E._safety_play(spec, game, dead) is not None:
+        return
+    avoid = frozenset(dead)
+    rank, layers = E._layers(game, set(range(n)) - win - dead, avoid)
+    steps, cut, kept = E._Play(game, rank, layers, avoid).run(game.initial)
+    s = game.initial
+    for st in steps:
+        assert st.state == s and (st.action, st.target) in game.edges[s]
+        assert st.by_controller == (st.action in game.controllable)
+        assert st.by_controller or game.env[s]
+        s = st.target
+    if steps and steps[-1].target in dead:
+        return
+    loop = steps[cut:]
+    assert loop and loop[-1].target == loop[0].state
+    avoided = game.guarantees[kept[cut]] | game.failures
+    assert not any(st.state in avoided for st in loop)
+    for a in game.assumptions:
+        assert any(st.state in a for st in loop)
