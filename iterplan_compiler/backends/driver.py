@@ -72,8 +72,12 @@ def spec_sha256(text: str) -> str:
 def load_model(path: str | Path, text: str | None = None) -> tuple[Any | None, list[Diagnostic]]:
     """Run the front-end on ``path`` (``text`` overrides reading the file)."""
     from iterplan_compiler import frontend
+    from iterplan_compiler.fltl.open_safety import safety_of_formulas
 
-    return frontend.load(str(path), text=text)
+    model, diags = frontend.load(str(path), text=text)
+    if model is not None and not has_errors(diags):  # e.g. `ltl_property L = []<> land`
+        diags = [*diags, *safety_of_formulas(model)]
+    return model, diags
 
 
 def _sources(model: Any, path: str | Path, text: str | None) -> dict[str, str]:

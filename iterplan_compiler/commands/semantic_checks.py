@@ -4,7 +4,7 @@ Each check is a pure function of the elaborated :class:`~iterplan_compiler.ir.mo
 (plus, for token positions, the syntax tree of the file and its includes) returning
 diagnostics at the offending token:
 
-* :func:`safety_of_formulas` — an ``ltl_property``/``constraint`` whose safety LTS forbids
+* :func:`~iterplan_compiler.fltl.open_safety.safety_of_formulas` — an ``ltl_property``/``constraint`` whose safety LTS forbids
   nothing over its alphabet Σφ must still be a safety formula once an action outside Σφ is
   allowed (E302, the FLTL stage's code, with a witness).  Over ``{land}`` alone every word
   satisfies ``[]<> land``, so the translation of §2.8 accepts it and a controller spec listing
@@ -26,17 +26,15 @@ from __future__ import annotations
 import dataclasses
 import re
 from collections.abc import Iterable, Iterator
-from dataclasses import replace
 
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
+from iterplan_compiler.fltl.open_safety import safety_of_formulas
 from iterplan_compiler.frontend import syntax as S
-from iterplan_compiler.ir.formulas import NamedFormula
 from iterplan_compiler.ir.model import Model
 
 W_CONTROLLABLE = "W0704"   # a controllable action no plant of the spec's composites can do
 W_FLUENT = "W501"          # a fluent action no plant can do (as synthesis reports it)
 E_INCLUDE_SET = "E0209"    # a set an included file needs is declared nowhere
-E_NOT_SAFETY = "E302"      # an ltl_property/constraint that is not a safety formula
 
 _KEYWORD_STATES = frozenset({"STOP", "END", "ERROR"})
 
@@ -45,60 +43,6 @@ def run_all(model: Model) -> list[Diagnostic]:
     """Every check of this module, in a stable order."""
     return [*safety_of_formulas(model), *labels_against_plants(model),
             *include_set_dependencies(model)]
-
-
-# --------------------------------------------------------------------------------------------
-# Safety of ltl_property / constraint
-
-
-def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
-    """For a formula whose safety LTS over Σφ forbids nothing: a trace (``prefix (cycle)^w``,
-    ``*`` an action outside Σφ) that violates it without a bad prefix, or ``None``.
-
-    ``None`` also when the LTS forbids something (the translation's own test over Σφ, run
-    when building, is then MTSA's) or cannot be built (building reports that)."""
-    from iterplan_compiler.fltl.emptiness import StateLimitExceeded
-    from iterplan_compiler.fltl.progression import WILDCARD
-    from iterplan_compiler.fltl.safety import DEFAULT_MAX_STATES, not_safety_witness, safety_dfa
-    from iterplan_compiler.fltl.semantics import UnknownFluentError
-
-    from iterplan_compiler import limits
-    from iterplan_compiler.ir.lts import ERROR
-
-    if limits.formula_too_large(named.formula) is not None:
-        return None  # building reports E0603
-    cap = min(DEFAULT_MAX_STATES, limits.current().max_states)
-    wide = replace(named, extra_alphabet=named.extra_alphabet | {WILDCARD})
-    try:
-        closed, _, _ = safety_dfa(named, model.fluents, max_states=cap)
-        if any(t == ERROR for _, _, t in closed.transitions):
-            return None  # it forbids something: the builder's own safety test (§2.8) decides
-        dfa, _, _ = safety_dfa(wide, model.fluents, max_states=cap)
-        witness = not_safety_witness(dfa, wide, model.fluents, cap)
-    except (UnknownFluentError, StateLimitExceeded, RecursionError):
-        return None
-    if witness is None:
-        return None
-    prefix, cycle = witness
-    return " ".join([*prefix, "(" + " ".join(cycle) + ")^w"])
-
-
-def safety_of_formulas(model: Model) -> list[Diagnostic]:
-    """E302 for every ``ltl_property``/``constraint`` that is not a safety formula."""
-    out = []
-    for name, named in model.formulas.items():
-        if named.kind not in ("ltl_property", "constraint"):
-            continue
-        trace = open_safety_witness(named, model)
-        if trace is None:
-            continue
-        out.append(error(
-            E_NOT_SAFETY,
-            f"{named.kind} {name} must be a safety formula, but it is not: the trace {trace} "
-            "(* = any action outside the formula's alphabet) has no bad prefix, yet it "
-            "violates the formula; state a liveness goal in the controllerSpec's liveness "
-            "list instead", named.span))
-    return out
 
 
 # --------------------------------------------------------------------------------------------

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
 
     model, diags, sources = load_with_sources(args.spec)
     if model is not None and not has_errors(diags):  # e.g. `ltl_property L = []<> land`
-        from iterplan_compiler.commands.semantic_checks import safety_of_formulas
+        from iterplan_compiler.fltl.open_safety import safety_of_formulas
 
         diags += safety_of_formulas(model)
     if diags:

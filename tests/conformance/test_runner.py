@@ -248,3 +248,14 @@ def test_report_prints_every_row_with_every_check(tmp_path: Path, capsys):
     assert lines[1].endswith("builds C: pass; builds D: pass")
     assert "builds Nope: error" in lines[2]
     assert "      error       builds Nope: no such composite in the file" in out
+
+
+def test_a_missing_checker_module_is_never_a_pass(tmp_path: Path, monkeypatch):
+    import sys
+
+    rows = [("game.lts", "realizable", "DirectedController",
+             "composition!=null; assert Check holds on ||Sys")]
+    monkeypatch.setitem(sys.modules, "iterplan_compiler.fltl.check", None)  # import fails
+    (res,) = _results(tmp_path, rows)
+    assert [c.status.value for c in res.checks] == ["pass", "crash"]
+    assert res.status == "crash" and "ModuleNotFoundError" in res.checks[1].detail

@@ -78,6 +78,13 @@ def test_liveness_formula_as_safety_goal_is_not_realizable(tmp_path, capsys):
     assert "error[E302]" in err
 
 
+def test_liveness_formula_as_safety_goal_is_not_compiled(tmp_path, capsys):
+    spec = write(tmp_path, LIVENESS_AS_SAFETY)
+    code, _, err = run(capsys, "compile", spec, "-o", tmp_path / "ctrl.py")
+    assert code == 1 and "error[E302]" in err
+    assert not (tmp_path / "ctrl.py").exists()
+
+
 @pytest.mark.parametrize("formula", ["[](takeoff -> X fly)", "[](!land W fly)", "takeoff",
                                      "[](Landed -> !land)"])
 def test_safety_formulas_are_not_flagged(tmp_path, capsys, formula):
