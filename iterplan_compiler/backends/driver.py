@@ -8,7 +8,7 @@
     python.emit_module / graphviz.to_dot / fsp_print.lts_to_fsp / jsonout.to_json
 
 Each step stops the pipeline when it reports errors; every failure a user can cause comes back as
-a :class:`~iterplan_compiler.diagnostics.Diagnostic` (codes ``E5xx``, listed in
+a :class:`~iterplan_compiler.diagnostics.Diagnostic` (codes ``E09xx``/``E10xx``, listed in
 ``docs/backends.md``), never as an exception.  The heavy stages are imported lazily so that
 importing this module stays cheap.
 """
@@ -36,12 +36,12 @@ from iterplan_compiler.ir.lts import LTS, reachable
 EMIT_KINDS = ("py", "dot", "fsp", "json")
 
 # Stable diagnostic codes of this stage.
-E_UNREALIZABLE = "E501"   # the controller composite has no controller
-E_NO_COMPOSITE = "E502"   # no controller composite in the file / the named one is not one
-E_NOT_EMITTABLE = "E503"  # synthesis returned something that is not a deterministic controller
-E_UNKNOWN_NAME = "E504"   # `iterc dot SPEC NAME`: NAME is not defined
-E_NO_LTS = "E505"         # the model built no LTS for NAME and said nothing (should not happen)
-W_SYNTHESIS = "W501"      # a warning synthesis reported while posing the game
+E_UNREALIZABLE = "E0901"   # the controller composite has no controller
+E_NO_COMPOSITE = "E0904"   # no controller composite in the file / the named one is not one
+E_NOT_EMITTABLE = "E1001"  # synthesis returned something that is not a deterministic controller
+E_UNKNOWN_NAME = "E0104"   # `iterc dot SPEC NAME`: NAME is not defined
+E_NO_LTS = "E1002"         # the model built no LTS for NAME and said nothing (should not happen)
+W_SYNTHESIS = "W0905"      # a warning synthesis reported while posing the game
 
 
 @dataclass(frozen=True)
@@ -144,7 +144,7 @@ def synthesize_composite(
 ) -> tuple[Any | None, Any | None, list[Diagnostic]]:
     """Build the synthesis problem of ``composite`` and solve it.
 
-    Returns ``(problem, result, diagnostics)``; an unrealizable problem yields an ``E501``
+    Returns ``(problem, result, diagnostics)``; an unrealizable problem yields an ``E0901``
     error carrying synthesis's explanation (and ``result`` with ``realizable == False``); a
     problem synthesis could not pose as a game yields synthesis's own diagnostics instead.
     """

@@ -27,7 +27,7 @@ from iterplan_compiler.diagnostics import Span, error, has_errors, render
 HELP = "animate a process or composite: pick actions, undo, save the trace"
 
 E_BAD_COMMAND = "E1311"
-E_NO_TARGET = "E504"  # as `iterc lts`
+E_NO_TARGET = "E0104"  # as `iterc lts`
 E_NO_SPEC = "E1312"
 
 COMMANDS_HELP = ("commands: NUMBER or ACTION fires it, u/undo, s/save PATH, h/help, q/quit")

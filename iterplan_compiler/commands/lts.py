@@ -34,16 +34,16 @@ def run(args: argparse.Namespace) -> int:
         return 1
     whole_file = Span(args.spec, 0, 0)
     name = args.name or model.default_name()
-    # E504 as `iterc dot SPEC NAME` (the same mistake gets the same code in both commands)
+    # E0104 as `iterc dot SPEC NAME` (the same mistake gets the same code in both commands)
     if name is None:
-        print(render([error("E504", "the spec defines no process or composite to build",
+        print(render([error("E0104", "the spec defines no process or composite to build",
                             whole_file)]), file=sys.stderr)
         return 1
     if name not in model.names() and name != "DEFAULT":  # DEFAULT: MTSA's all-processes
         close = difflib.get_close_matches(name, model.names(), n=1)
         hint = (f"did you mean '{close[0]}'?" if close
                 else "defined: " + (", ".join(model.names()) or "none"))
-        print(render([error("E504", f"no process or composite named '{name}'; {hint}",
+        print(render([error("E0104", f"no process or composite named '{name}'; {hint}",
                             whole_file)]), file=sys.stderr)
         return 1
     lts, ds = model.build_lts(name)

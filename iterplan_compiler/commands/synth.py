@@ -68,14 +68,14 @@ def run(args: argparse.Namespace) -> int:
     if name is None:
         name = _pick_composite(model)
         if name is None:
-            print(render([error("E502", "no controller composite to synthesise (write "
+            print(render([error("E0904", "no controller composite to synthesise (write "
                                 "`controller ||C = (Plant)~{Spec}.`)", whole_file)]),
                   file=sys.stderr)
             return 1
     elif name not in model.composites:
         close = difflib.get_close_matches(name, model.composites, n=1)
         hint = f"; did you mean '{close[0]}'?" if close else ""
-        print(render([error("E502", f"no composite named '{name}'{hint}", whole_file)]),
+        print(render([error("E0904", f"no composite named '{name}'{hint}", whole_file)]),
               file=sys.stderr)
         return 1
     problem, pdiags = model.synthesis_problem(name)

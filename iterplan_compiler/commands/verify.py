@@ -20,8 +20,8 @@ from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors, r
 
 HELP = "model-check an FLTL assert on a composite"
 
-E_NO_SUCH_ASSERT = "E304"
-E_NO_SUCH_TARGET = "E305"
+E_NO_SUCH_ASSERT = "E0607"
+E_NO_SUCH_TARGET = "E0608"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,7 +58,7 @@ def _missing(name: str, known, spec: str, *, what: str = "assert",
              code: str = E_NO_SUCH_ASSERT) -> Diagnostic:
     hint = difflib.get_close_matches(name, sorted(known), n=1)
     extra = f" (did you mean '{hint[0]}'?)" if hint else ""
-    # Line 0 = "the file as a whole": renders as `SPEC: error[E304]: ...`.
+    # Line 0 = "the file as a whole": renders as `SPEC: error[E0607]: ...`.
     return error(code, f"no {what} named '{name}' in {Path(spec).name}{extra}",
                  Span(spec, 0, 0))
 

@@ -111,7 +111,7 @@ def synthesize(
                                     order=order, permissive=problem.permissive)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
-        return SynthesisResult(False, None, None, msg, stats, (error("S003", msg, problem.span),))
+        return SynthesisResult(False, None, None, msg, stats, (error("E0908", msg, problem.span),))
     realizable, controller, explanation = result
     if not realizable or controller is None:
         return SynthesisResult(False, None, None, explanation, stats)

@@ -45,7 +45,7 @@ def test_compile_default_composite_writes_module(spec, tmp_path, capsys):
     err = capsys.readouterr().err
     # The stub controller's unreachable state 9 is dropped by the canonical renumbering.
     assert "controller for 'Fire' (11 states)" in err
-    assert "warning[W501]: fluent F: actions ['zz'] are not plant actions" in err
+    assert "warning[W0905]: fluent F: actions ['zz'] are not plant actions" in err
     mod = load_module(out.read_text(), tmp_path, "fire_ctl_cli")
     assert mod.NAME == "Fire" and set(mod.TRANSITIONS) == set(reachable(fire_patrol()).transitions)
     assert mod.SPEC_FILE == "fire_patrol.lts"
@@ -66,14 +66,14 @@ def test_compile_to_stdout_is_deterministic(spec, capsys):
 def test_compile_unrealizable_explains(spec, capsys):
     assert main(["compile", str(spec), "-c", "Unreal"]) == 1
     err = capsys.readouterr().err
-    assert "error[E501]" in err and "no controller exists for 'Unreal'" in err
+    assert "error[E0901]" in err and "no controller exists for 'Unreal'" in err
     assert "keep y.next from happening" in err
     assert "fire_patrol.lts:2:1" in err and "controller ||Unreal" in err  # source line shown
 
 
 def test_compile_unknown_composite(spec, capsys):
     assert main(["compile", str(spec), "-c", "Nope"]) == 1
-    assert "error[E502]" in capsys.readouterr().err
+    assert "error[E0904]" in capsys.readouterr().err
 
 
 def test_compile_no_controller_composite(spec, capsys):
@@ -132,7 +132,7 @@ def test_dot_controller_and_errors(spec, tmp_path, capsys):
     assert main(["dot", str(spec), "Nope"]) == 1
     assert "defined: Iterator, Unreal, Fire" in capsys.readouterr().err
     assert main(["dot", str(spec), "Unreal", "--controller"]) == 1
-    assert "E501" in capsys.readouterr().err
+    assert "E0901" in capsys.readouterr().err
     assert main(["dot", str(spec), "-o", str(tmp_path / "x.bmp")]) == 2
 
 

@@ -155,7 +155,7 @@ def test_unrealizable_spec_is_explained(tmp_path, capsys):
     spec.write_text(text)
     assert main(["compile", str(spec), "-o", str(tmp_path / "x.py")]) == 1
     err = capsys.readouterr().err
-    assert "hopeless.lts:" in err and "error[E501]" in err
+    assert "hopeless.lts:" in err and "error[E0901]" in err
     assert "no controller exists for 'Patrol'" in err
     assert "controller ||Patrol" in err  # the composite's source line is shown
     assert not (tmp_path / "x.py").exists()

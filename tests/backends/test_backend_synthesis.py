@@ -2,7 +2,7 @@
 
 This pins the contract between ``synthesis.driver.synthesize`` and the back-end: the emitted
 module's table is exactly the synthesised controller, and unrealizable problems come back as
-an E501 diagnostic carrying synthesis's explanation.
+an E0901 diagnostic carrying synthesis's explanation.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def test_module_table_equals_synthesised_controller(spec, tmp_path, solver):
 def test_unrealizable_reports_explanation(spec, capsys):
     assert main(["compile", str(spec), "-c", "Hopeless"]) == 1
     err = capsys.readouterr().err
-    assert "error[E501]" in err and "no controller exists for 'Hopeless'" in err
+    assert "error[E0901]" in err and "no controller exists for 'Hopeless'" in err
     assert "guarantee" in err  # synthesis's explanation is passed through
 
 

@@ -131,10 +131,10 @@ def test_unknown_composite_name(command, capsys):
 
 def test_verify_unknown_names_suggest(capsys):
     res = run_cli(capsys, "verify", GOLDEN_SPEC, "--assert", "AskForevr", "--on", "Environment")
-    m = assert_input_error(res, GOLDEN_SPEC, code="E304")
+    m = assert_input_error(res, GOLDEN_SPEC, code="E0607")
     assert "did you mean 'AskForever'" in m["msg"]
     res = run_cli(capsys, "verify", GOLDEN_SPEC, "--assert", "AskForever", "--on", "Enviroment")
-    m = assert_input_error(res, GOLDEN_SPEC, code="E305")
+    m = assert_input_error(res, GOLDEN_SPEC, code="E0608")
     assert "did you mean 'Environment'" in m["msg"]
 
 

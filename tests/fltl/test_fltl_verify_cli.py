@@ -65,11 +65,11 @@ def test_verify_prints_lasso_counterexample(spec, capsys):
 def test_verify_reports_bad_names(spec, capsys):
     assert cli.main(["verify", spec, "--assert", "Rsp", "--on", "Sys"]) == 1
     err = capsys.readouterr().err
-    assert "E304" in err and "did you mean 'Resp'" in err
+    assert "E0607" in err and "did you mean 'Resp'" in err
     assert cli.main(["verify", spec, "--assert", "Resp", "--on", "Nope"]) == 1
     assert "E999" in capsys.readouterr().err
     assert cli.main(["verify", spec, "--assert", "Bad", "--on", "Sys"]) == 1
-    assert "E301" in capsys.readouterr().err
+    assert "E0604" in capsys.readouterr().err
 
 
 def test_verify_usage(spec, capsys):
