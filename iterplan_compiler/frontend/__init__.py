@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors
+from iterplan_compiler.frontend.source import read_spec, text_binary_at
 
 __all__ = ["load", "load_with_sources", "parse_file"]
 
@@ -23,10 +24,16 @@ def parse_file(path: str, text: str | None = None):
     diags: list[Diagnostic] = []
     if text is None:
         try:
-            text = Path(path).read_text(encoding="utf-8-sig", errors="replace")
+            read = read_spec(path)
         except OSError as e:
             return None, [error("E0800", f"cannot read {path}: {e.strerror or e}",
                                 Span(path, 0, 0))], {}
+        if isinstance(read, tuple):
+            return None, [not_text(path, read)], {}
+        text = read
+    where = text_binary_at(text)
+    if where is not None:
+        return None, [not_text(path, where)], {}
     sources = {path: text}
     from iterplan_compiler import limits
 
@@ -67,6 +74,13 @@ def load_with_sources(path: str, text: str | None = None):
         # the tree walks are recursive; absurdly deep nesting is bad input, not a crash
         return None, [too_deep(path)], sources
     return model, diags + ds, sources
+
+
+def not_text(path: str, where: tuple[int, int]) -> Diagnostic:
+    """E0008: the input is binary (checked on its first bytes, before any parsing), located
+    at its first NUL or control byte."""
+    return error("E0008", f"{path} is not a text file (it contains NUL or control bytes); "
+                 "iterc reads FSP specs (.lts text files)", Span(path, *where))
 
 
 def too_deep(path: str) -> Diagnostic:

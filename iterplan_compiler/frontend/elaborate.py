@@ -34,13 +34,20 @@ from iterplan_compiler.frontend.expressions import (
     expand_set,
     fmt,
     part_values,
+    report,
     to_int,
     truth,
 )
 from iterplan_compiler.frontend.processes import build_process
 from iterplan_compiler.ir import formulas as F
 from iterplan_compiler.ir.lts import LTS, TAU, make_lts, reachable, renamed
-from iterplan_compiler.ir.model import ControllerSpec, Model, ModelBackend, SynthesisProblem
+from iterplan_compiler.ir.model import (
+    SYNTHESIS_KEYWORDS,
+    ControllerSpec,
+    Model,
+    ModelBackend,
+    SynthesisProblem,
+)
 from iterplan_compiler.synthesis import driver as synthesis_driver
 from iterplan_compiler.synthesis.encode import prepare as prepare_game
 
@@ -48,8 +55,7 @@ OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "prope
             "optimistic", "pessimistic", "component", "controller", "gr", "rtc", "rtcAnalysis",
             "starenv", "plant", "checkCompatibility", "controlled_det", "probabilistic", "mdp",
             "heuristic", "monolithicDirector")
-SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector",
-                                "checkCompatibility"})
+GAME_KEYWORDS = SYNTHESIS_KEYWORDS | {"checkCompatibility"}
 # Operators on a spec'd plant that do not synthesise (§3.11).
 PLANT_KEYWORDS = frozenset({"plant", "controlled_det"})
 # Parsed, accepted at load time, but building such a composite reports E0150 (none left).
@@ -102,6 +108,13 @@ def _instance_name(name: str, args: tuple[Value, ...]) -> str:
     return f"{name}({','.join(fmt(a) for a in args)})" if args else name
 
 
+def _join(first: Span, last: Span) -> Span:
+    """The span from the start of ``first`` to the end of ``last`` (on one line: else ``first``)."""
+    if first.line == last.line and last.end_column is not None:
+        return Span(first.file, first.line, first.column, last.line, last.end_column)
+    return first
+
+
 class Elaborator(ModelBackend):
     """Holds the declaration tables and builds LTSs on demand (the :class:`Model` backend)."""
 
@@ -111,6 +124,7 @@ class Elaborator(ModelBackend):
         self.ranges: dict[str, tuple[int, int]] = {}
         self.sets: dict[str, tuple[str, ...]] = {}
         self.defs: dict[str, S.DefDecl] = {}
+        self.failed: set[str] = set()  # const/range/set declarations that failed (reported)
         self.processes: dict[str, S.ProcessDecl] = {}
         self.composites: dict[str, S.CompositeDecl] = {}
         self.formula_decls: dict[str, S.FormulaDecl] = {}
@@ -124,6 +138,10 @@ class Elaborator(ModelBackend):
         self.specs: dict[str, ControllerSpec] = {}
         self.formula_errors: dict[str, Diagnostic] = {}
         self.cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
+        # builds without solving (``solve=False``: a controller composite gives its plant)
+        # keep their own cache: a composite using a controller composite differs between them
+        self.solving = True
+        self._unsolved_cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
         # synthesised composites by instance name: a controller composite built at top level
         # and again as a component of another composite is synthesised once
         self.synth_cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
@@ -138,7 +156,7 @@ class Elaborator(ModelBackend):
     # ------------------------------------------------------------------ tables
     @property
     def tables(self) -> Tables:
-        return Tables(self.consts, self.ranges, self.sets, self.defs)
+        return Tables(self.consts, self.ranges, self.sets, self.defs, self.failed)
 
     def env(self) -> Env:
         return Env(self.tables)
@@ -162,11 +180,11 @@ class Elaborator(ModelBackend):
                         self.consts[d.name] = evaluate(d.value, self.env())
                 elif isinstance(d, S.RangeDecl):
                     if not dup("range", d.name, d.span):
-                        lo = to_int(evaluate(d.low, self.env()), d.span)
-                        hi = to_int(evaluate(d.high, self.env()), d.span)
+                        lo = to_int(evaluate(d.low, self.env()), d.low.span)
+                        hi = to_int(evaluate(d.high, self.env()), d.high.span)
                         if lo > hi:
                             diags.append(error("E0204", f"empty range {d.name} = {lo}..{hi}",
-                                               d.span))
+                                               _join(d.low.span, d.high.span)))
                         self.ranges[d.name] = (lo, hi)
                 elif isinstance(d, S.SetDecl):
                     if not dup("set", d.name, d.span):
@@ -203,7 +221,9 @@ class Elaborator(ModelBackend):
                 elif isinstance(d, S.IncludeDecl):  # resolved by includes.py before us
                     pass
             except EvalError as e:
-                diags.append(e.diag)
+                if isinstance(d, (S.ConstDecl, S.RangeDecl, S.SetDecl)):
+                    self.failed.add(d.name)
+                report(diags, e)
         self._fluents(diags)
         self._formulas(diags)
         self._specs(diags)
@@ -239,7 +259,7 @@ class Elaborator(ModelBackend):
                     self.fluents[key] = F.Fluent(key, ini, ter, init, d.span)
                     members.append(key)
             except EvalError as e:
-                diags.append(e.diag)
+                report(diags, e)
             self.fluent_families[name] = members
 
     # ------------------------------------------------------------------ formulas
@@ -255,8 +275,9 @@ class Elaborator(ModelBackend):
                 # MTSA compiles formulas lazily: a broken, unused formula is not an error.  We
                 # warn now and report the error where the formula is used.
                 self.formula_errors[name] = e.diag
-                diags.append(warning("W0603", f"{d.kind} {name} is not usable: "
-                                     f"{e.diag.message}", e.diag.span))
+                if not e.consequential:
+                    diags.append(warning("W0603", f"{d.kind} {name} is not usable: "
+                                         f"{e.diag.message}", e.diag.span))
 
     def formula(self, f: S.FNode, env: Env, stack: tuple[str, ...]) -> F.Formula:
         """Syntactic formula → IR formula (fluent families, quantifiers, asserts expanded)."""
@@ -334,7 +355,7 @@ class Elaborator(ModelBackend):
                     else:
                         flags.add(it.key)
             except EvalError as e:
-                diags.append(e.diag)
+                report(diags, e)
             self.specs[name] = ControllerSpec(
                 name, fields.get("safety", ()), fields.get("assumption", ()),
                 fields.get("liveness", ()), fields.get("failure", ()), controllable, marking,
@@ -386,9 +407,16 @@ class Elaborator(ModelBackend):
                                    + " -> ".join([*path, path[0]]), d.span))
 
     # ------------------------------------------------------------------ building
-    def build_lts(self, name: str, unrealizable: str = "error"
+    def build_lts(self, name: str, unrealizable: str = "error", solve: bool = True
                   ) -> tuple[LTS | None, list[Diagnostic]]:
         """See :meth:`Model.build_lts`."""
+        if not solve and self.solving:
+            saved = self.cache
+            self.cache, self.solving = self._unsolved_cache, False
+            try:
+                return self.build_lts(name, unrealizable)
+            finally:
+                self.cache, self.solving = saved, True
         from iterplan_compiler import limits
 
         limits.progress(f"building {name}", 0)
@@ -423,7 +451,7 @@ class Elaborator(ModelBackend):
             lts = self._build(name, (), Span("<command line>", 0, 0), diags,
                               prefer_composite=True)
         except EvalError as e:
-            diags.append(e.diag)
+            report(diags, e)
             lts = None
         result = (lts, diags)
         self.cache[key] = result
@@ -452,7 +480,7 @@ class Elaborator(ModelBackend):
         try:
             lts = self._build(name, args, span, local)
         except EvalError as e:
-            local.append(e.diag)
+            report(local, e)
             lts = None
         finally:
             stack.pop()
@@ -592,11 +620,12 @@ class Elaborator(ModelBackend):
         """
         env = self.env().with_params(self._params(d.params, args, d.name, d.span))
         kws = set(d.keywords)
-        if "checkCompatibility" in kws and not kws & (SYNTHESIS_KEYWORDS
+        if "checkCompatibility" in kws and not kws & (GAME_KEYWORDS
                                                       - {"checkCompatibility"}):
             lts = self._compatibility(d, env, inst, diags)
-        elif kws & SYNTHESIS_KEYWORDS:
-            lts = self._synthesised(d, inst, diags)
+        elif kws & GAME_KEYWORDS:
+            lts = (self._synthesised(d, inst, diags) if self.solving
+                   else self._unsolved_plant(d, inst, diags))
         elif kws & PLANT_KEYWORDS:
             lts = self._plant_operators(d, env, inst, diags)
         else:
@@ -852,7 +881,7 @@ class Elaborator(ModelBackend):
                 problem = self._controlled_det_problem(problem, d, diags)
             return problem, diags
         except EvalError as e:
-            diags.append(e.diag)
+            report(diags, e)
             return None, diags
         except RecursionError:
             from iterplan_compiler.frontend import too_deep
@@ -989,6 +1018,24 @@ class Elaborator(ModelBackend):
         env = self.env().with_params(self._params(d.params, (), d.name, d.span))
         lts = self._post_synthesis(plant, d, env, diags)
         return lts, diags
+
+    def _unsolved_plant(self, d: S.CompositeDecl, inst: str,
+                        diags: list[Diagnostic]) -> LTS | None:
+        """A synthesis composite built without solving: the plant its game is played on
+        (body machines ∥ safety machines, after §3.8), named like the composite."""
+        from iterplan_compiler.ir.compose import StateExplosion, compose
+
+        problem = self._problem(d.name, diags)
+        if problem is None:
+            return None
+        problem = self._controlled_det_problem(problem, d, diags)
+        if problem is None:
+            return None
+        try:
+            return compose([*problem.plant, *problem.safety], inst, max_states=_max_states())
+        except StateExplosion as e:
+            diags.append(error("E0402", f"composing the plant of {d.name}: {e}", d.span))
+            return None
 
     def _synthesised(self, d: S.CompositeDecl, inst: str, diags: list[Diagnostic]) -> LTS | None:
         if inst not in self.synth_cache:

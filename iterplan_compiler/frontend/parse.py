@@ -80,6 +80,24 @@ def _tok_span(path: str, tok: Token) -> Span:
 _DOT_RE = re.compile(r'//[^\n]*|/\*.*?\*/|"[^"\n]*"|\d\.\d|\.\.|\.(?![A-Za-z_\[{])', re.S)
 
 
+_COMMENT_RE = re.compile(r'//[^\n]*|"[^"\n]*"|/\*.*?\*/|(/\*)', re.S)
+
+
+def _unterminated_comment(text: str) -> int | None:
+    """Offset of a ``/*`` that is never closed (outside strings and line comments), if any."""
+    if "/*" not in text:
+        return None
+    for m in _COMMENT_RE.finditer(text):
+        if m.group(1):
+            return m.start()
+    return None
+
+
+def _position(text: str, offset: int) -> tuple[int, int]:
+    line = text.count("\n", 0, offset) + 1
+    return line, offset - (text.rfind("\n", 0, offset) + 1) + 1
+
+
 def _describe(tok: Token) -> str:
     if tok.type == "$END":
         return "end of input"
@@ -105,6 +123,13 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
                 return S.SpecFile(path, ()), [error(
                     "E0006", f"the file has more than {cap:,} top-level declarations: "
                     f"{limits.hint('max_declarations')}", Span(path, line, 1))]
+    open_comment = _unterminated_comment(text)
+    if open_comment is not None:
+        # Report the comment at its start and parse what precedes it (not "unexpected '/'").
+        line, col = _position(text, open_comment)
+        diags.append(error("E0007", "unterminated comment: this '/*' has no closing '*/'",
+                           Span(path, line, col, line, col + 2)))
+        text = text[:open_comment]
     lark = parser()
     decl_states = _decl_start_states(lark)
 
@@ -117,6 +142,8 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
         if isinstance(e, UnexpectedToken):
             tok = e.token
             if tok.type == "$END":
+                if open_comment is not None:
+                    return False  # the declaration the comment cut off: already reported
                 diags.append(error("E0003", "unexpected end of input (missing '.'?)",
                                    Span(path, tok.line or e.line, tok.column or e.column)))
                 return False
@@ -194,11 +221,66 @@ def _token_error(path: str, tok: Token, expected: set[str], text: str) -> Diagno
         return error("E0150", f"unsupported construct: '{value}' declarations", span)
     if value in ("++", "+ca", "+cr"):
         return error("E0150", "unsupported construct: MTS merge operators", span)
-    exp = sorted(expected)
-    shown = ", ".join(_pretty_terminal(t) for t in exp[:8])
-    more = "" if len(exp) <= 8 else ", ..."
-    return error("E0001", f"syntax error: unexpected {_describe(tok)}; expected one of: "
-                 f"{shown}{more}", span)
+    keywords, starters = _declaration_keywords(parser())
+    opening = expected & keywords
+    # Top-level keywords are acceptable here only because the declaration before could end;
+    # listing them all would hide what the current construct accepts: one phrase instead.
+    exp = sorted(t for t in expected - (starters if opening else keywords) if t != "$END")
+    shown = [_pretty_terminal(t) for t in exp[:8]]
+    if len(exp) > 8:
+        shown.append("...")
+    if opening:
+        shown.append("a new declaration")
+    elif "$END" in expected:
+        shown.append("end of input")
+    message = f"syntax error: unexpected {_describe(tok)}; expected " + (
+        f"one of: {', '.join(shown)}" if len(shown) > 1 else "".join(shown) or "nothing")
+    hint = _formula_hint(text, tok)
+    return error("E0001", message + (f"; {hint}" if hint else ""), span)
+
+
+_DECL_KEYWORD_RE = re.compile(
+    r"\b(assert|ltl_property|constraint|const|range|set|fluent|def|controllerSpec|progress|"
+    r"menu|animation|include)\b")
+
+
+def _formula_hint(text: str, tok: Token) -> str | None:
+    """For a binary operator after a complete ``assert``/``ltl_property``/``constraint`` body:
+    the body is one unary formula, so suggest parenthesising it."""
+    if str(tok.value) not in ("&&", "||", "->", "<->", "U", "W") or tok.start_pos is None:
+        return None
+    before = text[:tok.start_pos]
+    last = None
+    for last in _DECL_KEYWORD_RE.finditer(before):
+        pass
+    if last is None or last.group(1) not in ("assert", "ltl_property", "constraint"):
+        return None
+    head = before[last.start():]
+    if head.count("=") != 1 or "." in head.replace("..", ""):
+        return None
+    name, _, body = head.partition("=")
+    line_end = text.find("\n", tok.start_pos)
+    rest = text[tok.start_pos: len(text) if line_end < 0 else line_end]
+    rest = rest.split("//")[0].split("/*")[0].strip()
+    return (f"the body of {last.group(1)} is one formula: parenthesise it, "
+            f"`{name.strip()} = ({body.strip()} {rest})`")
+
+
+@functools.lru_cache(maxsize=1)
+def _declaration_keywords(lark: Lark) -> tuple[frozenset[str], frozenset[str]]:
+    """``(keywords, starters)``: the terminals a declaration-start state shifts, and those of
+    them that are keywords (``const``, ``assert``, ...)."""
+    table = lark.parser.parser.parser.parse_table
+    names = {t.name: t.pattern for t in lark.terminals}
+    out: set[str] = set()
+    starters: set[str] = set()
+    for st in _decl_start_states(lark):
+        for term in table.states[st]:
+            starters.add(term)
+            pattern = names.get(term)
+            if pattern is not None and pattern.type == "str" and pattern.value.isidentifier():
+                out.add(term)
+    return frozenset(out), frozenset(starters)
 
 
 _TERMINAL_NAMES = {

@@ -7,7 +7,7 @@ so ``{a,b} -> c -> P`` shares one intermediate state.  A reference to an undefin
 becomes a transition to ERROR with warning W0301 (MTSA's idiom).
 
 Codes: W0301 local defined to be ERROR, E0302 local state defined twice, E0303 alias cycle,
-E0304 `property` process not deterministic, E0305 `;` item is not sequential.
+E0305 `;` item is not sequential.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.expressions import (
+    report,
     Env,
     EvalError,
     Value,
@@ -281,7 +282,7 @@ def build_process(decl: S.ProcessDecl, env: Env, name: str, get_process: Process
         b.collect_locals()
         init = b.local_state(decl.name, decl.span)
     except EvalError as e:
-        diags.append(e.diag)
+        report(diags, e)
         return None
     trans = b.trans
     n = b.n
