@@ -14,7 +14,7 @@ letter and four digits: ``E`` error, ``W`` warning; the hundreds give the stage
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 
@@ -233,7 +233,7 @@ def _caret_line(source_line: str, column: int, end_column: int | None) -> str:
     return prefix + "^" + "~" * (width - 1)
 
 
-def render_one(diag: Diagnostic, sources: dict[str, str] | None = None) -> str:
+def render_one(diag: Diagnostic, sources: Mapping[str, str] | None = None) -> str:
     """Format one diagnostic, with the source line and a caret when the source is known."""
     sources = sources or {}
     out: list[str] = []
@@ -258,6 +258,6 @@ def render_one(diag: Diagnostic, sources: dict[str, str] | None = None) -> str:
     return "\n".join(out)
 
 
-def render(diags: Iterable[Diagnostic], sources: dict[str, str] | None = None) -> str:
+def render(diags: Iterable[Diagnostic], sources: Mapping[str, str] | None = None) -> str:
     """Format diagnostics in order, one block each, separated by newlines."""
     return "\n".join(render_one(d, sources) for d in diags)

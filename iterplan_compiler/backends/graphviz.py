@@ -80,7 +80,7 @@ def to_dot(
             attrs["shape"] = "doublecircle"
         if s == lts.initial:
             attrs["style"] = "bold"
-        graph.add_node(pydot.Node(str(s), **attrs))
+        graph.add_node(pydot.Node(str(s), **attrs))  # type: ignore[arg-type]  # pydot stubs
     if lts.has_error:
         graph.add_node(pydot.Node(
             _ERROR_NODE, shape="box", style="filled", fillcolor="#f4cccc", color="red",
@@ -104,7 +104,7 @@ def to_dot(
         if dashed:
             attrs["style"] = "dashed"
         target = _ERROR_NODE if t == ERROR else str(t)
-        graph.add_edge(pydot.Edge(str(s), target, **attrs))
+        graph.add_edge(pydot.Edge(str(s), target, **attrs))  # type: ignore[arg-type]  # pydot stubs
     return graph.to_string()
 
 

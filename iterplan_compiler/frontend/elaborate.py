@@ -21,6 +21,7 @@ from fractions import Fraction
 
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
 from iterplan_compiler.frontend import syntax as S
+from iterplan_compiler.frontend.errors import too_deep
 from iterplan_compiler.frontend.expressions import (
     Env,
     EvalError,
@@ -299,7 +300,7 @@ class Elaborator(ModelBackend):
             return F.ActionProp(frozenset(expand_label(f.label, env)))
         if isinstance(f, S.FCall):
             return self._assert_ref(f.name, f.args, env, stack, f.span)
-        # FRef
+        assert isinstance(f, S.FRef), f
         if f.name in self.fluent_families:
             if not f.indices:
                 if f.name in self.fluents:
@@ -423,8 +424,6 @@ class Elaborator(ModelBackend):
         try:
             lts, diags = self._build_top(name)
         except RecursionError:
-            from iterplan_compiler.frontend import too_deep
-
             self.building.clear()
             return None, [too_deep(self.spec.path)]
         except limits.LimitReached as e:  # e.g. the winning region of a game: a diagnostic
@@ -884,8 +883,6 @@ class Elaborator(ModelBackend):
             report(diags, e)
             return None, diags
         except RecursionError:
-            from iterplan_compiler.frontend import too_deep
-
             self.building.clear()
             return None, [*diags, too_deep(self.spec.path)]
 

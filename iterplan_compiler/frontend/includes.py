@@ -14,7 +14,7 @@ from pathlib import Path
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
-from iterplan_compiler.frontend.source import read_spec
+from iterplan_compiler.frontend.source import decode, read_spec
 
 
 def _resolve(name: str, including: str) -> tuple[str, str] | str | None:
@@ -28,7 +28,7 @@ def _resolve(name: str, including: str) -> tuple[str, str] | str | None:
             return (str(cand), text) if isinstance(text, str) else "not a text file"
         res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
         if res.is_file():
-            return f"<stdlib>/{name}", res.read_text(encoding="utf-8", errors="replace")
+            return f"<stdlib>/{name}", decode(res.read_bytes())
     except (OSError, ValueError) as e:  # ValueError: an embedded NUL byte
         return getattr(e, "strerror", None) or str(e)
     return None

@@ -152,9 +152,10 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
             skip_from = err_pos
             at_dot = tok.type == "DOT"
         elif isinstance(e, UnexpectedCharacters):
-            diags.append(error("E0002", f"unexpected character {text[e.pos_in_stream]!r}",
+            pos = e.pos_in_stream or 0
+            diags.append(error("E0002", f"unexpected character {text[pos]!r}",
                                Span(path, e.line, e.column, e.line, e.column + 1)))
-            skip_from = e.pos_in_stream
+            skip_from = pos
             at_dot = False
         else:  # pragma: no cover - UnexpectedEOF is not raised by the LALR front end
             return False
@@ -163,7 +164,7 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
             state.state_stack.pop()
             if state.value_stack:
                 state.value_stack.pop()
-        if not at_dot:
+        if not at_dot and lexer_state is not None:
             nxt = _next_top_level_dot(text, skip_from)
             line_ctr = lexer_state.line_ctr
             if nxt > line_ctr.char_pos:
@@ -179,6 +180,8 @@ def parse_text(text: str, path: str = "<input>", *, allow_mts: bool = False
     builder = _Builder(path, diags, allow_mts=allow_mts)
     decls = []
     for child in tree.children:
+        if not isinstance(child, Tree):
+            continue
         try:
             d = builder.decl(child)
         except _Malformed as m:
@@ -250,9 +253,8 @@ def _formula_hint(text: str, tok: Token) -> str | None:
     if str(tok.value) not in ("&&", "||", "->", "<->", "U", "W") or tok.start_pos is None:
         return None
     before = text[:tok.start_pos]
-    last = None
-    for last in _DECL_KEYWORD_RE.finditer(before):
-        pass
+    matches = list(_DECL_KEYWORD_RE.finditer(before))
+    last = matches[-1] if matches else None
     if last is None or last.group(1) not in ("assert", "ltl_property", "constraint"):
         return None
     head = before[last.start():]
@@ -340,7 +342,7 @@ class _Builder:
         end_col = meta.end_column if meta.end_line == meta.line else None
         return Span(self.path, meta.line, meta.column, meta.end_line, end_col)
 
-    def int_lit(self, tok: Token) -> int:
+    def int_lit(self, tok: Token | Tree) -> int:
         """An integer literal; E0208 (not a crash) past ``--max-int-bits``."""
         msg = limits.literal_too_large(str(tok))
         if msg is not None:
@@ -766,7 +768,7 @@ class _Builder:
         if d == "e_call":
             return S.Call(str(c[0]), tuple(self.expr(a) for a in c[1:] if a is not None), sp)
         if d == "e_label":
-            parts = [S.Ident(str(c[0]), self.span(c[0]))]
+            parts: list[S.Part] = [S.Ident(str(c[0]), self.span(c[0]))]
             for p in c[1:]:
                 if isinstance(p, Tree) and p.data == "lpart_rest":
                     p = p.children[-1]

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.expressions import (
-    report,
     Env,
     EvalError,
     Value,
@@ -28,6 +28,7 @@ from iterplan_compiler.frontend.expressions import (
     expand_label_env,
     fmt,
     part_values,
+    report,
     truth,
 )
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU, make_lts
@@ -200,8 +201,8 @@ class _Builder:
         Python's recursion limit); it numbers states and emits transitions in the same order
         as the obvious recursive version: a state is created when first reached, the move
         into it is recorded once the chain behind it is done."""
-        Frame = list  # [state, index, label iterator, pending transition or None]
-        stack: list[Frame] = [[s, i, iter(expand_label_env(c.labels[i], env)), None]]
+        # a frame: [state, index, label iterator, pending transition or None]
+        stack: list[list[Any]] = [[s, i, iter(expand_label_env(c.labels[i], env)), None]]
         while stack:
             frame = stack[-1]
             if frame[3] is not None:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from iterplan_compiler.diagnostics import NO_SPAN, Span
 
@@ -33,9 +34,11 @@ def _span() -> Span:
 
 
 class Expr:
-    """Base of expression nodes."""
+    """Base of expression nodes (every node has a ``span``)."""
 
     __slots__ = ()
+    if TYPE_CHECKING:
+        span: Span
 
 
 @dataclass(frozen=True)

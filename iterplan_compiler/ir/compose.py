@@ -138,11 +138,11 @@ def _explore(
         loc_i: list[list[tuple[str, int | None]]] = []
         lead_i: list[list[tuple[str, list[int | None], list[int]]]] = []
         look_i: list[dict[str, list[int | None]]] = []
-        for moves in by_state:
+        for by_label in by_state:
             loc: list[tuple[str, int | None]] = []
             led: list[tuple[str, list[int | None], list[int]]] = []
             look: dict[str, list[int | None]] = {}
-            for a, ds in moves.items():
+            for a, ds in by_label.items():
                 own = owners.get(a)
                 if a == TAU or own is None or len(own) == 1:
                     # A label used on a transition but missing from the alphabet cannot happen

@@ -13,7 +13,6 @@ from iterplan_compiler.diagnostics import NO_SPAN, Diagnostic, Span
 from iterplan_compiler.ir.formulas import Fluent, Formula, NamedFormula
 from iterplan_compiler.ir.lts import LTS
 
-
 #: Composite keywords that make a composite a synthesis problem (MTSA §1.11, §3.9, §3.10):
 #: building it solves a game.  (``checkCompatibility`` also poses the game, without solving.)
 SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector"})

@@ -13,6 +13,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from iterplan_compiler.diagnostics import has_errors
+from iterplan_compiler.fltl.check import model_check
+from iterplan_compiler.synthesis.driver import synthesize
+
 
 def check_row(model: Any, row: Any, *, solver: str = "symbolic") -> tuple[bool | None, str]:
     """Check one row against ``model`` (a front-end ``Model``); see the module doc."""
@@ -23,9 +27,6 @@ def check_row(model: Any, row: Any, *, solver: str = "symbolic") -> tuple[bool |
 
 
 def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
-    from iterplan_compiler.diagnostics import has_errors
-    from iterplan_compiler.synthesis.driver import synthesize
-
     name = row.composite_name
     problem, diags = model.synthesis_problem(name)
     if problem is None or has_errors(diags):
@@ -49,6 +50,8 @@ def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
         if expected is None:
             return None, "cannot build ExpectedC"
         ours = result.composition
+        if ours is None:
+            return False, "realizable but no composition was built"
         if "property" in problem.keywords:
             # §2.6: `property` is applied after synthesis (determinise, complete to ERROR)
             from iterplan_compiler.ir.alphabet_ops import property_complete
@@ -72,10 +75,6 @@ def _check_assertion(model: Any, names: set[str], result: Any) -> tuple[bool, st
                            ("CheckWithout", "SysWithout")):
         if fname not in formulas:
             continue
-        try:
-            from iterplan_compiler.fltl.check import model_check
-        except ImportError:
-            return True, "assert not checked (fltl.check missing)"
         system = result.composition
         if sysname and sysname in names:
             built, _ = model.build_lts(sysname)

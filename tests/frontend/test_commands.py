@@ -134,7 +134,7 @@ def test_synth_shows_why_a_goal_cannot_be_posed(tmp_path, capsys):
     assert code == 1
     assert "C: UNREALIZABLE" in out
     [e] = _errors(err)
-    assert e["code"].startswith("S") and e["line"] == "6"
+    assert e["code"] == "E0907" and e["line"] == "6"  # goal not propositional
     assert "controller ||C" in err  # the composite's source line
 
 

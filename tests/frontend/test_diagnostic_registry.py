@@ -10,7 +10,7 @@ from iterplan_compiler import diagnostics
 from iterplan_compiler.diagnostics import CODES, Stage
 
 PACKAGE = Path(diagnostics.__file__).resolve().parent
-# a quoted code: "E0101", 'W0301', "G112" (comments such as `# noqa: E402` are not codes)
+# a quoted code: "E0101", "W0301", "G112" (unquoted words in lint comments are not codes)
 LITERAL = re.compile(r"""["']([A-Z]\d{3,4})["']""")
 SCHEME = re.compile(r"^(?:[EW]\d{4}|G\d{3})$")
 STAGE_OF_HUNDREDS = {0: Stage.INPUT, 1: Stage.NAMES, 2: Stage.EXPRESSIONS, 3: Stage.PROCESSES,
