@@ -14,8 +14,6 @@ import subprocess
 from collections.abc import Iterable
 from pathlib import Path
 
-import pydot
-
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU
 
 #: Output formats :func:`render` understands, by file suffix.
@@ -59,6 +57,10 @@ def to_dot(
     the LTS's name) labels the graph.  Nodes are named by state number; ``state_names``, when the
     LTS has them, become node labels.
     """
+    # pydot (and pyparsing under it) is imported here, not at module level: 20-40 ms that
+    # `iterc compile --emit py`, the common case, does not need
+    import pydot
+
     ctrl = frozenset(controllable) if controllable is not None else frozenset()
     graph = pydot.Dot(
         _q(lts.name or "LTS"),
