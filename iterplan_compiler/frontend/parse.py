@@ -14,11 +14,13 @@ permissive grammar but not valid FSP), E0150 unsupported construct, W0151 ignore
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib.resources
 import os
 import re
 import sys
 
+import lark
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
@@ -38,12 +40,14 @@ _UNSUPPORTED_WORDS = {
 }
 
 
-def _cache_file() -> str | bool:
+def _cache_file(grammar: str) -> str | bool:
     """Where Lark may keep the analysed parse table between runs (building it takes ~1 s, which
     every ``iterc`` call would pay).  A per-user directory, not the shared temp dir, because
-    the cache is a pickle.  Lark stores the grammar's hash in the file and rebuilds (and
-    rewrites) it when the grammar changes or the file is unreadable.  ``ITERPLAN_NO_CACHE=1``
-    or an unwritable home disable it."""
+    the cache is a pickle.  The file name carries a hash of the grammar and of the Lark
+    version, so installs with different grammars (several checkouts, an upgrade) keep their
+    own tables instead of rebuilding and overwriting one file in turn; Lark also checks the
+    hash stored inside and rebuilds a stale or unreadable file.  ``ITERPLAN_NO_CACHE=1`` or an
+    unwritable home disable it."""
     if os.environ.get("ITERPLAN_NO_CACHE"):
         return False
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
@@ -54,7 +58,8 @@ def _cache_file() -> str | bool:
         return False
     if not os.access(folder, os.W_OK):
         return False
-    return os.path.join(folder, f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}.pickle")
+    key = hashlib.sha256(f"{lark.__version__}\n{grammar}".encode()).hexdigest()[:16]
+    return os.path.join(folder, f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}-{key}.pickle")
 
 
 @functools.lru_cache(maxsize=1)
@@ -64,7 +69,7 @@ def parser() -> Lark:
         encoding="utf-8")
     options = dict(parser="lalr", lexer="contextual", propagate_positions=True,
                    maybe_placeholders=True)
-    cache = _cache_file()
+    cache = _cache_file(text)
     if cache:
         try:
             return Lark(text, cache=cache, **options)
