@@ -11,14 +11,31 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Protocol
 
 from iterplan_compiler.diagnostics import has_errors
 from iterplan_compiler.fltl.check import model_check
-from iterplan_compiler.synthesis.driver import synthesize
+from iterplan_compiler.ir.alphabet_ops import property_complete
+from iterplan_compiler.ir.minimise import bisimilar, deterministic
+from iterplan_compiler.ir.model import Model
+from iterplan_compiler.synthesis.driver import Solver, SynthesisResult, synthesize
 
 
-def check_row(model: Any, row: Any, *, solver: str = "symbolic") -> tuple[bool | None, str]:
+class Row(Protocol):
+    """What a check needs of a ``verdicts.tsv`` row (``conformance.Row``)."""
+
+    @property
+    def composite_name(self) -> str: ...
+
+    @property
+    def expected(self) -> str: ...
+
+    @property
+    def checks(self) -> str: ...
+
+
+def check_row(model: Model, row: Row, *, solver: Solver | str = Solver.SYMBOLIC
+              ) -> tuple[bool | None, str]:
     """Check one row against ``model`` (a front-end ``Model``); see the module doc."""
     try:
         return _check(model, row, solver)
@@ -26,26 +43,25 @@ def check_row(model: Any, row: Any, *, solver: str = "symbolic") -> tuple[bool |
         return False, f"internal error: {type(exc).__name__}: {exc}"
 
 
-def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
+def _check(model: Model, row: Row, solver: Solver | str) -> tuple[bool | None, str]:
     name = row.composite_name
     problem, diags = model.synthesis_problem(name)
     if problem is None or has_errors(diags):
-        msgs = "; ".join(getattr(d, "message", str(d)) for d in diags)[:200]
+        msgs = "; ".join(d.message for d in diags)[:200]
         return None, f"no synthesis problem for {name}: {msgs}"
     result = synthesize(problem, solver=solver, explain=False)
     want = not row.expected.startswith("unrealizable")
     verdict = "realizable" if result.realizable else "unrealizable"
-    sizes = f"game {result.stats.get('game_states', '?')} states"
+    game = result.stats.game_states
+    sizes = f"game {game if game is not None else '?'} states"
     if result.realizable != want:
         return False, f"{verdict} (expected {row.expected}); {sizes}"
     if not result.realizable:
         return True, f"{verdict}; {sizes}"
-    detail = [verdict, sizes, f"controller {result.stats.get('controller_states')} states"]
-    names = set(model.names()) if hasattr(model, "names") else set()
-    if "ExpectedC" in names and "ExpectedC" in getattr(row, "checks", ""):
+    detail = [verdict, sizes, f"controller {result.stats.controller_states} states"]
+    names = set(model.names())
+    if "ExpectedC" in names and "ExpectedC" in row.checks:
         # only BisimilarFSP asserts ExpectedC; the NonBlocking files' directors are not checked
-        from iterplan_compiler.ir.minimise import bisimilar
-
         expected, d2 = model.build_lts("ExpectedC")
         if expected is None:
             return None, "cannot build ExpectedC"
@@ -54,9 +70,6 @@ def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
             return False, "realizable but no composition was built"
         if "property" in problem.keywords:
             # §2.6: `property` is applied after synthesis (determinise, complete to ERROR)
-            from iterplan_compiler.ir.alphabet_ops import property_complete
-            from iterplan_compiler.ir.minimise import deterministic
-
             ours = property_complete(deterministic(ours))
         if not bisimilar(ours, expected, same_alphabet=False):
             return False, "; ".join(detail + [
@@ -69,13 +82,16 @@ def _check(model: Any, row: Any, solver: str) -> tuple[bool | None, str]:
     return ok, "; ".join(detail)
 
 
-def _check_assertion(model: Any, names: set[str], result: Any) -> tuple[bool, str]:
-    formulas = getattr(model, "formulas", {}) or {}
+def _check_assertion(model: Model, names: set[str], result: SynthesisResult
+                     ) -> tuple[bool, str]:
+    formulas = model.formulas
     for fname, sysname in (("Check", "Sys"), ("TESTGOAL", None), ("CheckWith", "SysWith"),
                            ("CheckWithout", "SysWithout")):
         if fname not in formulas:
             continue
         system = result.composition
+        if system is None:
+            return False, f"assert {fname}: no composition to check"
         if sysname and sysname in names:
             built, _ = model.build_lts(sysname)
             if built is not None:
