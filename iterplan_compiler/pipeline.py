@@ -307,7 +307,8 @@ class CompileOutput:
     controller: LTS | None = None
     controllable: frozenset[str] = frozenset()
     sources: Mapping[str, str] = field(default_factory=dict)
-    stats: SynthesisStats | None = None
+    #: synthesis's sizes and times (an empty record when synthesis did not run)
+    stats: SynthesisStats = field(default_factory=lambda: SynthesisStats(Solver.SYMBOLIC))
     synthesised: LTS | None = None
 
 
@@ -326,7 +327,7 @@ def compile_spec(path: str | Path, *, composite: str | None = None,
     synth = synthesise(pose(elab, picked),
                        SynthesisOptions(Solver(solver), explain=True, progress=progress))
     diags = elab.diagnostics + synth.diagnostics
-    stats = synth.result.stats if synth.result is not None else None
+    stats = synth.result.stats if synth.result is not None else SynthesisStats(Solver.SYMBOLIC)
     if not synth.ok:
         return CompileOutput(None, diags, picked, sources=elab.sources, stats=stats)
     out = emit(elab, synth, EmitKind(emit_kind))
