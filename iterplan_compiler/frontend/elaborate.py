@@ -319,7 +319,7 @@ def elaborate(spec: S.SpecFile, text: str, sources: dict[str, str] | None = None
     """Build the :class:`Model` of a parsed file (LTSs are built lazily)."""
     diags: list[Diagnostic] = []
     el = Elaborator(spec, diags)
-    consts: dict[str, object] = {k: (float(v) if isinstance(v, Fraction) else v)
+    consts: dict[str, int | float | str] = {k: (float(v) if isinstance(v, Fraction) else v)
                                  for k, v in el.consts.items()}
     model = Model(
         source_path=spec.path, source_text=text,

@@ -7,6 +7,7 @@ synthesis and must keep their field names.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import NO_SPAN, Diagnostic, Span
@@ -117,17 +118,17 @@ class Model:
     source_text: str
     processes: tuple[str, ...]
     composites: tuple[str, ...]
-    composite_keywords: dict[str, frozenset[str]]
-    fluents: dict[str, Fluent]
-    formulas: dict[str, NamedFormula]
-    controller_specs: dict[str, ControllerSpec]
-    constants: dict[str, object]
-    ranges: dict[str, tuple[int, int]]
-    sets: dict[str, tuple[str, ...]]
+    composite_keywords: Mapping[str, frozenset[str]]
+    fluents: Mapping[str, Fluent]
+    formulas: Mapping[str, NamedFormula]
+    controller_specs: Mapping[str, ControllerSpec]
+    constants: Mapping[str, int | float | str]
+    ranges: Mapping[str, tuple[int, int]]
+    sets: Mapping[str, tuple[str, ...]]
     backend: ModelBackend = field(repr=False)
-    sources: dict[str, str] = field(default_factory=dict, repr=False)
+    sources: Mapping[str, str] = field(default_factory=dict, repr=False)
     #: file that declares each process/composite/formula (``source_path`` or an included file)
-    origins: dict[str, str] = field(default_factory=dict, repr=False)
+    origins: Mapping[str, str] = field(default_factory=dict, repr=False)
 
     def names(self) -> tuple[str, ...]:
         """Names accepted by :meth:`build_lts`: processes, composites, ltl_property/constraint."""
