@@ -50,6 +50,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {name} is a controller composite; this is the plant its game is played "
               "on (iterc lts does not synthesise: use iterc synth or iterc compile)",
               file=sys.stderr)
+    elif used := model.synthesis_components(name):
+        print(f"note: {name} uses controller composite(s) {', '.join(used)}, built here as "
+              "the plant of their game (iterc lts does not synthesise)", file=sys.stderr)
     alphabet = " ".join(sorted(lts.alphabet))
     if args.stats:
         print(f"{name}: states {lts.num_states} transitions {lts.num_transitions} "

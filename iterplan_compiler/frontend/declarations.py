@@ -397,6 +397,24 @@ class Declarations:
                 diags.append(error("E0401", "recursive expression while parallel composing: "
                                    + " -> ".join([*path, path[0]]), d.span))
 
+    def synthesis_components(self, name: str) -> tuple[str, ...]:
+        """The synthesis composites ``name`` uses, directly or through other composites (in
+        first-use order; ``name`` itself excluded)."""
+        seen: dict[str, None] = {}
+        stack = [name]
+        while stack:
+            d = self.composites.get(stack.pop())
+            if d is None:
+                continue
+            refs: list[S.CRef] = []
+            _cb_crefs(d.body, refs)
+            for r in refs:
+                if r.name in self.composites and r.name not in self.processes \
+                        and r.name not in seen and r.name != name:
+                    seen[r.name] = None
+                    stack.append(r.name)
+        return tuple(n for n in seen if set(self.composites[n].keywords) & SYNTHESIS_KEYWORDS)
+
 
 
 def _fold(cls: type, parts: list[F.Formula], conj: bool) -> F.Formula:

@@ -97,6 +97,9 @@ class ModelBackend:
     def legality(self, name: str) -> tuple[bool, str]:  # pragma: no cover - interface
         raise NotImplementedError
 
+    def synthesis_components(self, name: str) -> tuple[str, ...]:  # pragma: no cover
+        raise NotImplementedError
+
 
 @dataclass(frozen=True, eq=False)
 class Model:
@@ -168,6 +171,10 @@ class Model:
     def is_synthesis_composite(self, name: str) -> bool:
         """True for a composite whose keywords ask for synthesis (``controller``, ...)."""
         return bool(self.composite_keywords.get(name, frozenset()) & SYNTHESIS_KEYWORDS)
+
+    def synthesis_components(self, name: str) -> tuple[str, ...]:
+        """The synthesis composites composite ``name`` uses (directly or through others)."""
+        return self.backend.synthesis_components(name)
 
     def controller_composites(self) -> tuple[str, ...]:
         """The synthesis composites, in file order (nothing is built)."""

@@ -187,6 +187,7 @@ def test_lts_builds_the_plant_without_solving(write, capsys, monkeypatch):
     res = run_cli(capsys, "lts", spec, "Sys", "--stats")
     assert res.code == 0, res.err
     assert res.out.startswith("Sys: states 3 transitions 4")
+    assert "note: Sys uses controller composite(s) C, built here as the plant" in res.err
 
 
 def test_output_path_unwritable(tmp_path, capsys):
