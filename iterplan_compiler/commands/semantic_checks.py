@@ -6,7 +6,7 @@ diagnostics at the offending token:
 
 * :func:`~iterplan_compiler.fltl.open_safety.safety_of_formulas` — an ``ltl_property``/``constraint`` whose safety LTS forbids
   nothing over its alphabet Σφ must still be a safety formula once an action outside Σφ is
-  allowed (E302, the FLTL stage's code, with a witness).  Over ``{land}`` alone every word
+  allowed (E0605, the FLTL stage's code, with a witness).  Over ``{land}`` alone every word
   satisfies ``[]<> land``, so the translation of §2.8 accepts it and a controller spec listing
   it as ``safety`` would be "realizable"; MTSA's tableau test (not confined to Σφ-words)
   rejects it, and so do we.  Formulas that do forbid something are left to the translation's
@@ -14,7 +14,7 @@ diagnostics at the offending token:
 * :func:`labels_against_plants` — a ``controllable`` action of a spec some synthesis composite
   uses that no process (nor plant) can do (W0704: usually a misspelling; a library set with
   actions this plant leaves out is fine), and an action of a fluent declared in the file that no
-  plant can do (W501, the code synthesis uses for the same problem, docs/backends.md); without
+  plant can do (W0905, the code synthesis uses for the same problem, docs/backends.md); without
   a synthesis composite, fluents are checked against the processes' alphabets.
 * :func:`include_set_dependencies` — a set an included file mentions but nobody declares
   (E0209, e.g. ``set HereActions`` needed by ``stdlib/sensors.lts``), at the use in the
@@ -33,7 +33,7 @@ from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.ir.model import Model
 
 W_CONTROLLABLE = "W0704"   # a controllable action no plant of the spec's composites can do
-W_FLUENT = "W501"          # a fluent action no plant can do (as synthesis reports it)
+W_FLUENT = "W0905"          # a fluent action no plant can do (as synthesis reports it)
 E_INCLUDE_SET = "E0209"    # a set an included file needs is declared nowhere
 
 _KEYWORD_STATES = frozenset({"STOP", "END", "ERROR"})
@@ -84,7 +84,7 @@ def _label_span(model: Model, label: str, near: Span) -> Span:
 
 
 def labels_against_plants(model: Model) -> list[Diagnostic]:
-    """W0704 for a controllable action no process can do; W501 for an action of a fluent
+    """W0704 for a controllable action no process can do; W0905 for an action of a fluent
     declared in the main file that no plant (no process, without synthesis) can do."""
     plants = _synthesis_plants(model)
     processes = _process_alphabets(model)

@@ -5,7 +5,7 @@ the formula's own alphabet Σφ.  Over ``{land}`` alone every word satisfies ``[
 it is accepted, forbids nothing, and a controller spec listing it under ``safety`` is
 "realizable"; MTSA's tableau test (not confined to Σφ-words) rejects it.  Here a formula
 whose safety LTS forbids nothing over Σφ must still be a safety formula once an action
-outside Σφ (:data:`~iterplan_compiler.fltl.progression.WILDCARD`) is allowed, else E302 with
+outside Σφ (:data:`~iterplan_compiler.fltl.progression.WILDCARD`) is allowed, else E0605 with
 a witness.  Formulas that do forbid something are left to the translation's own test, so
 nothing MTSA accepts is rejected here.  Used by ``iterc check``/``synth`` and the back-ends.
 """
@@ -24,7 +24,7 @@ from iterplan_compiler.ir.formulas import NamedFormula
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.ir.model import Model
 
-E_NOT_SAFETY = "E302"      # the FLTL stage's code (fltl/safety.py) for the same problem
+E_NOT_SAFETY = "E0605"      # the FLTL stage's code (fltl/safety.py) for the same problem
 
 
 def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
@@ -52,7 +52,7 @@ def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
 
 
 def safety_of_formulas(model: Model) -> list[Diagnostic]:
-    """E302 for every ``ltl_property``/``constraint`` that is not a safety formula."""
+    """E0605 for every ``ltl_property``/``constraint`` that is not a safety formula."""
     out = []
     for name, named in model.formulas.items():
         if named.kind not in ("ltl_property", "constraint"):

@@ -65,7 +65,7 @@ def test_liveness_formula_as_safety_property_is_an_error(tmp_path, capsys):
     code, out, err = run(capsys, "check", spec)
     assert code == 1 and "ok" not in out
     ((c, sev, line, col, msg, _),) = diags(err)
-    assert (c, sev) == ("E302", "error")
+    assert (c, sev) == ("E0605", "error")
     assert (line, col) == where(LIVENESS_AS_SAFETY, "L = ")
     assert "ltl_property L must be a safety formula" in msg and "(*)^w" in msg
 
@@ -75,13 +75,13 @@ def test_liveness_formula_as_safety_goal_is_not_realizable(tmp_path, capsys):
     code, out, err = run(capsys, "synth", spec)
     assert code == 1
     assert "realizable" not in out
-    assert "error[E302]" in err
+    assert "error[E0605]" in err
 
 
 def test_liveness_formula_as_safety_goal_is_not_compiled(tmp_path, capsys):
     spec = write(tmp_path, LIVENESS_AS_SAFETY)
     code, _, err = run(capsys, "compile", spec, "-o", tmp_path / "ctrl.py")
-    assert code == 1 and "error[E302]" in err
+    assert code == 1 and "error[E0605]" in err
     assert not (tmp_path / "ctrl.py").exists()
 
 
@@ -91,14 +91,14 @@ def test_safety_formulas_are_not_flagged(tmp_path, capsys, formula):
     text = PLANT + f"ltl_property P = {formula}\n||S = (UAV || P).\n"
     code, out, err = run(capsys, "check", write(tmp_path, text))
     assert code == 0, err
-    assert "E302" not in err
+    assert "E0605" not in err
 
 
 def test_constraint_that_is_liveness_is_an_error(tmp_path, capsys):
     text = PLANT + "constraint K = <> fly\n||S = (UAV || K).\n"
     code, _, err = run(capsys, "check", write(tmp_path, text))
     assert code == 1
-    assert [d[:2] for d in diags(err)] == [("E302", "error")]
+    assert [d[:2] for d in diags(err)] == [("E0605", "error")]
     assert "constraint K must be a safety formula" in err
 
 
@@ -124,7 +124,7 @@ def test_controllable_set_from_a_library_is_not_a_misspelling(capsys):
     # uav.lts's UAVC lists land/restart; Fire Patrol's plant does not use them
     code, _, err = run(capsys, "check", REPO / "examples" / "fire_patrol.lts")
     assert code == 0
-    assert "W0704" not in err and "W501" not in err
+    assert "W0704" not in err and "W0905" not in err
 
 
 FLUENT = PLANT + """\
@@ -142,7 +142,7 @@ def test_fluent_action_not_in_the_plant_is_w501(tmp_path, capsys):
     code, _, err = run(capsys, "check", write(tmp_path, FLUENT))
     assert code == 0
     ((c, sev, line, col, msg, _),) = diags(err)
-    assert (c, sev) == ("W501", "warning")
+    assert (c, sev) == ("W0905", "warning")
     assert (line, col) == where(FLUENT, "takeof,")
     assert "fluent Flying: action 'takeof' is not an action of any plant" in msg
     assert "did you mean 'takeoff'?" in msg
@@ -153,7 +153,7 @@ def test_fluent_without_synthesis_is_checked_against_the_processes(tmp_path, cap
     code, _, err = run(capsys, "check", write(tmp_path, text))
     assert code == 0
     ((c, _, line, col, msg, _),) = diags(err)
-    assert (c, line, col) == ("W501", 2, 16) and "not an action of any process" in msg
+    assert (c, line, col) == ("W0905", 2, 16) and "not an action of any process" in msg
 
 
 def test_missing_set_needed_by_an_included_library(tmp_path, capsys):
@@ -182,4 +182,4 @@ def test_unused_library_fragment_needs_no_set(capsys):
 def test_bundled_examples_get_no_new_diagnostics(example, capsys):
     code, _, err = run(capsys, "check", example)
     assert code == 0
-    assert not {"E302", "W0704", "W501", "E0209"} & {d[0] for d in diags(err)}
+    assert not {"E0605", "W0704", "W0905", "E0209"} & {d[0] for d in diags(err)}

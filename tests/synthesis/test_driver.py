@@ -81,7 +81,7 @@ def test_temporal_goal_is_a_diagnostic():
     plant = make_lts("P", 1, [(0, "a", 0)])
     r = synthesize(problem(plant, controllable={"a"}, fluents=[fl("A", {"a"}, set())],
                            guarantees=(Next(F("A")),)))
-    assert not r.realizable and r.diagnostics and r.diagnostics[0].code == "S002"
+    assert not r.realizable and r.diagnostics and r.diagnostics[0].code == "E0907"
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
