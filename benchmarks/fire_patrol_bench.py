@@ -27,7 +27,7 @@ def _one(n: int) -> dict:
 
     warnings.simplefilter("ignore")
     from iterplan_compiler.experiments.catalog import explicit_fire_patrol
-    from iterplan_compiler.frontend import load
+    from iterplan_compiler.pipeline import load_model as load
     from iterplan_compiler.synthesis.driver import synthesize
 
     with tempfile.NamedTemporaryFile("w", suffix=".lts", delete=False) as fh:

@@ -30,7 +30,7 @@ def run_one(path: str, composite: str) -> dict:
 
     warnings.simplefilter("ignore")
     from iterplan_compiler.diagnostics import has_errors
-    from iterplan_compiler.frontend import load_with_sources
+    from iterplan_compiler.pipeline import load_model_with_sources as load_with_sources
     from iterplan_compiler.synthesis.driver import synthesize
 
     model, diags, _ = load_with_sources(path)

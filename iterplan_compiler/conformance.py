@@ -133,9 +133,9 @@ def check_row(root: Path, row: Row) -> RowResult:
 
 
 def _check(root: Path, row: Row) -> list[CheckResult]:
-    from iterplan_compiler import frontend
+    from iterplan_compiler import pipeline
 
-    model, diags = frontend.load(str(root / row.file))
+    model, diags = pipeline.load_model(root / row.file)
     problem = cc.diag_status(diags)
     if model is None or problem is not None:
         return [_load_failure(row, diags, problem or Status.ERROR)]
@@ -193,9 +193,9 @@ def _warm_up(root: Path) -> None:
         except ImportError:
             pass
     try:
-        from iterplan_compiler import frontend
+        from iterplan_compiler import pipeline
 
-        frontend.load(root / "warm-up.lts", text="A = (a -> A).\n")
+        pipeline.load_model(root / "warm-up.lts", text="A = (a -> A).\n")
     except Exception:  # warming up is an optimisation only
         pass
 

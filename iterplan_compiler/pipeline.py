@@ -35,7 +35,9 @@ from iterplan_compiler.fltl.open_safety import safety_of_formulas
 from iterplan_compiler.frontend.syntax import SpecFile
 from iterplan_compiler.ir.lts import LTS
 from iterplan_compiler.ir.model import Model, SynthesisProblem
+from iterplan_compiler.ir.solving import Synthesis
 from iterplan_compiler.synthesis import driver as synthesis_driver
+from iterplan_compiler.synthesis import encode as synthesis_encode
 from iterplan_compiler.synthesis.driver import (
     Solver,
     SynthesisResult,
@@ -45,7 +47,8 @@ from iterplan_compiler.synthesis.driver import (
 
 __all__ = ["BuildMode", "Built", "CompileOutput", "Elaborated", "EmitKind", "Emitted",
            "Parsed", "Posed", "Solver", "SynthesisOptions", "Synthesised", "build",
-           "compile_spec", "draw", "elaborate", "emit", "load", "parse", "pose", "synthesise"]
+           "SYNTHESIS", "compile_spec", "draw", "elaborate", "emit", "load", "load_model", "parse",
+           "pose", "synthesise"]
 
 E_UNREALIZABLE = "E0901"   # the controller composite has no controller
 E_NO_COMPOSITE = "E0904"   # no controller composite in the file / the named one is not one
@@ -59,6 +62,32 @@ Diagnostics = tuple[Diagnostic, ...]
 
 def _has_errors(diags: Diagnostics) -> bool:
     return any(d.is_error for d in diags)
+
+
+# ------------------------------------------------------------------ the injected synthesis
+
+class DriverSynthesis:
+    """:class:`~iterplan_compiler.ir.solving.Synthesis` over ``synthesis.driver``: what the
+    front-end calls when a build needs solving (it may not import synthesis, a higher layer).
+    Defaults of the driver (symbolic solver), as ``iterc check --build`` / ``verify`` use."""
+
+    @property
+    def input_errors(self) -> tuple[type[Exception], ...]:
+        return (synthesis_encode.SynthesisError, synthesis_encode.PreconditionFailure)
+
+    def synthesize(self, problem: SynthesisProblem) -> SynthesisResult:
+        # looked up at call time, so tests may monkeypatch synthesis_driver.synthesize
+        return synthesis_driver.synthesize(problem)
+
+    def check_compatibility(self, problem: SynthesisProblem) -> tuple[bool, str]:
+        return synthesis_driver.check_compatibility(problem)
+
+    def plant_components(self, problem: SynthesisProblem) -> tuple[LTS, ...]:
+        return tuple(synthesis_encode.prepare(problem).components)
+
+
+#: the synthesis every model loaded through the pipeline uses
+SYNTHESIS: Synthesis = DriverSynthesis()
 
 
 # ------------------------------------------------------------------ parse, elaborate
@@ -102,7 +131,8 @@ def elaborate(parsed: Parsed) -> Elaborated:
     """Pass 2: evaluate the declarations into a :class:`Model` (LTSs are built by :func:`build`)."""
     if not parsed.ok or parsed.spec is None:
         return Elaborated(parsed.path, None, parsed.diagnostics, parsed.sources)
-    model, diags = frontend.elaborate_spec(parsed.spec, dict(parsed.sources), parsed.path)
+    model, diags = frontend.elaborate_spec(parsed.spec, dict(parsed.sources), parsed.path,
+                                           synthesis=SYNTHESIS)
     sources = model.sources if model is not None else parsed.sources
     if model is not None and not any(d.is_error for d in diags):
         diags = [*diags, *safety_of_formulas(model)]   # e.g. `ltl_property L = []<> land`
@@ -112,6 +142,20 @@ def elaborate(parsed: Parsed) -> Elaborated:
 def load(path: str | Path, text: str | None = None) -> Elaborated:
     """Passes 1-2."""
     return elaborate(parse(path, text))
+
+
+def load_model(path: str | Path, text: str | None = None
+               ) -> tuple[Model | None, list[Diagnostic]]:
+    """:func:`frontend.load <iterplan_compiler.frontend.load>` with :data:`SYNTHESIS`
+    injected: ``(model, diagnostics)`` of passes 1-2 without the pipeline's extra checks, for
+    callers that build (and so may solve) machines of the model themselves."""
+    return frontend.load(str(path), text, synthesis=SYNTHESIS)
+
+
+def load_model_with_sources(path: str | Path, text: str | None = None
+                            ) -> tuple[Model | None, list[Diagnostic], dict[str, str]]:
+    """:func:`load_model`, also returning the sources (as ``frontend.load_with_sources``)."""
+    return frontend.load_with_sources(str(path), text, synthesis=SYNTHESIS)
 
 
 # ------------------------------------------------------------------ build

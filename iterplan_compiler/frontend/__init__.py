@@ -4,6 +4,11 @@ Entry point: :func:`load`.  Stages: :mod:`.parse` (Lark LALR grammar → :mod:`.
 all syntax errors reported), :mod:`.includes` (``include "file.lts"``), :mod:`.elaborate`
 (tables, fluents, formulas, specs; lazy LTS building via :mod:`.processes` and the composer
 of :mod:`iterplan_compiler.ir.compose`).
+
+The front-end never reaches up to the solver layer: building a composite that needs
+solving uses the ``synthesis`` object passed to :func:`load` / :func:`elaborate_spec`
+(interface :class:`~iterplan_compiler.ir.solving.Synthesis`; the pipeline passes the real
+one, :func:`iterplan_compiler.pipeline.load_model`).  Without it such a build reports E0909.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.source import read_spec, text_binary_at
 from iterplan_compiler.frontend.syntax import SpecFile
 from iterplan_compiler.ir.model import Model
+from iterplan_compiler.ir.solving import Synthesis
 
 __all__ = ["elaborate_spec", "load", "load_with_sources", "not_text", "parse_file", "too_deep"]
 
@@ -50,18 +56,21 @@ def parse_file(path: str, text: str | None = None
     return spec, diags, sources
 
 
-def load(path: str, text: str | None = None) -> tuple[Model | None, list[Diagnostic]]:
+def load(path: str, text: str | None = None, *, synthesis: Synthesis | None = None
+         ) -> tuple[Model | None, list[Diagnostic]]:
     """Parse and elaborate a spec file.
 
     Returns ``(model, diagnostics)``; ``model`` is ``None`` when the file could not be read or
     has syntax errors (elaboration errors still give a model, so callers can inspect what is
-    well-formed, but ``has_errors(diagnostics)`` is then true).
+    well-formed, but ``has_errors(diagnostics)`` is then true).  ``synthesis`` solves the
+    controller composites that building a machine needs (None: those builds report E0909).
     """
-    model, diags, _ = load_with_sources(path, text)
+    model, diags, _ = load_with_sources(path, text, synthesis=synthesis)
     return model, diags
 
 
-def load_with_sources(path: str, text: str | None = None
+def load_with_sources(path: str, text: str | None = None, *,
+                      synthesis: Synthesis | None = None
                       ) -> tuple[Model | None, list[Diagnostic], dict[str, str]]:
     """:func:`load`, also returning ``sources`` (file name → text of the file and of every
     include) so that callers can render diagnostics with source lines even when ``model`` is
@@ -69,15 +78,17 @@ def load_with_sources(path: str, text: str | None = None
     spec, diags, sources = parse_file(path, text)
     if spec is None or has_errors(diags):
         return None, diags, sources
-    model, ds = elaborate_spec(spec, sources, path)
+    model, ds = elaborate_spec(spec, sources, path, synthesis=synthesis)
     return model, diags + ds, sources
 
 
-def elaborate_spec(spec: SpecFile, sources: dict[str, str], path: str
+def elaborate_spec(spec: SpecFile, sources: dict[str, str], path: str, *,
+                   synthesis: Synthesis | None = None
                    ) -> tuple[Model | None, list[Diagnostic]]:
-    """Elaborate a parsed file (``sources[path]`` is its text) into a :class:`Model`."""
+    """Elaborate a parsed file (``sources[path]`` is its text) into a :class:`Model`;
+    ``synthesis`` as for :func:`load`."""
     try:
-        return elaborate(spec, sources[path], sources)
+        return elaborate(spec, sources[path], sources, synthesis)
     except RecursionError:
         # the tree walks are recursive; absurdly deep nesting is bad input, not a crash
         return None, [too_deep(path)]

@@ -20,7 +20,6 @@ from iterplan_compiler.frontend.declarations import (
     Declarations,
     _instance_name,
     _max_states,
-    _synthesis_errors,
     relabel,
 )
 from iterplan_compiler.frontend.errors import too_deep
@@ -42,7 +41,6 @@ from iterplan_compiler.ir.lts import LTS, reachable, renamed
 from iterplan_compiler.ir.model import (
     SynthesisProblem,
 )
-from iterplan_compiler.synthesis.encode import prepare as prepare_game
 
 
 class Composition(Declarations):
@@ -262,9 +260,12 @@ class Composition(Declarations):
             return None
         machines = [*problem.plant, *problem.safety]
         if "plant" in d.keywords:
+            synthesis = self._solver("the plant", d.name, d.span, diags)
+            if synthesis is None:
+                return None
             try:
-                machines = list(prepare_game(problem).components)
-            except _synthesis_errors() as e:
+                machines = list(synthesis.plant_components(problem))
+            except synthesis.input_errors as e:
                 # an unsupported goal; any other exception is a bug and propagates (exit 3)
                 diags.append(error("E0901", f"{d.name}: {getattr(e, 'message', e)}", d.span))
                 return None

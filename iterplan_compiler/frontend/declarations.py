@@ -8,7 +8,7 @@ building machines is :mod:`.composition`, synthesis problems :mod:`.elaborate`.
 Codes: E0101 duplicate definition (with the first site), E0102 undefined process/composite,
 E0103 operator keywords out of order, E0501 fluent sets not disjoint, E0601 undefined name in
 a formula, E0602 recursive assert, E0701 undefined spec / name in a spec, W0151 ignored
-declaration.
+declaration, E0909 a build needs synthesis but none was injected (:mod:`..ir.solving`).
 """
 
 from __future__ import annotations
@@ -39,6 +39,10 @@ from iterplan_compiler.ir.model import (
     ControllerSpec,
     SynthesisProblem,
 )
+from iterplan_compiler.ir.solving import Synthesis
+
+#: a composite needs synthesis but the front-end was given none (see ir/solving.py)
+E_NO_SYNTHESIS = "E0909"
 
 OP_ORDER = ("closure", "abstract", "deterministic", "minimal", "compose", "property",
             "optimistic", "pessimistic", "component", "controller", "gr", "rtc", "rtcAnalysis",
@@ -61,14 +65,6 @@ def _max_states() -> int:
     from iterplan_compiler import limits
 
     return MAX_STATES if MAX_STATES is not None else limits.current().max_states
-
-
-def _synthesis_errors() -> tuple[type[BaseException], ...]:
-    """The exceptions of the synthesis stage that are about the *input* (a diagnostic, exit 1);
-    every other exception is a compiler bug and must reach the CLI's exit 3 handler."""
-    from iterplan_compiler.synthesis import encode
-
-    return (encode.SynthesisError, encode.PreconditionFailure)
 
 
 def relabel(lts: LTS, mapping: Mapping[str, list[str]]) -> LTS:
@@ -109,8 +105,11 @@ def _join(first: Span, last: Span) -> Span:
 class Declarations:
     """The evaluated declaration tables of one file (the base of :class:`Elaborator`)."""
 
-    def __init__(self, spec: S.SpecFile, diags: list[Diagnostic]):
+    def __init__(self, spec: S.SpecFile, diags: list[Diagnostic],
+                 synthesis: Synthesis | None = None):
         self.spec = spec
+        # the injected synthesis stage (None: composites that need solving report E0909)
+        self.synthesis = synthesis
         self.consts: dict[str, Value] = {}
         self.ranges: dict[str, tuple[int, int]] = {}
         self.sets: dict[str, tuple[str, ...]] = {}
@@ -151,6 +150,17 @@ class Declarations:
 
     def env(self) -> Env:
         return Env(self.tables)
+
+    def _solver(self, what: str, name: str, span: Span,
+                diags: list[Diagnostic]) -> Synthesis | None:
+        """The injected synthesis stage; without one, E0909 (``what`` of composite ``name``
+        needs it) and None: the front-end alone poses games but does not solve them."""
+        if self.synthesis is None:
+            diags.append(error(E_NO_SYNTHESIS, f"{what} of {name} needs synthesis, which is "
+                               "not available in this build step (load the spec through "
+                               "iterplan_compiler.pipeline, or pass synthesis= to "
+                               "frontend.load)", span))
+        return self.synthesis
 
     def _collect(self, diags: list[Diagnostic]) -> None:
         seen: dict[tuple[str, str], Span] = {}

@@ -6,8 +6,12 @@ synthesis problems of controller composites (resolving their ``controllerSpec``,
 controlled determinisation of §3.8, ``checkCompatibility``), their solving and MTSA's
 legality check.
 
+Solving is not imported: it is the injected :class:`~iterplan_compiler.ir.solving.Synthesis`
+(``frontend.load(..., synthesis=...)``; the pipeline passes the real one).
+
 Codes: E0701 undefined spec / name in a spec, E0901 synthesis failed/unrealizable, W0902
-unrealizable (the plant returned instead), W0903 assumptions not compatible.
+unrealizable (the plant returned instead), W0903 assumptions not compatible, E0909 no
+synthesis injected.
 """
 
 from __future__ import annotations
@@ -23,7 +27,6 @@ from iterplan_compiler.frontend.declarations import (
     _cb_refs,
     _fluents_in,
     _max_states,
-    _synthesis_errors,
     relabel,
 )
 from iterplan_compiler.frontend.errors import too_deep
@@ -39,7 +42,7 @@ from iterplan_compiler.ir.model import (
     ModelBackend,
     SynthesisProblem,
 )
-from iterplan_compiler.synthesis import driver as synthesis_driver
+from iterplan_compiler.ir.solving import Synthesis
 
 
 class Elaborator(Composition, ModelBackend):
@@ -228,9 +231,12 @@ class Elaborator(Composition, ModelBackend):
         problem = self._problem(d.name, diags)
         if problem is None:
             return None
+        synthesis = self._solver("the compatibility check", d.name, d.span, diags)
+        if synthesis is None:
+            return None
         try:
-            compatible, message = synthesis_driver.check_compatibility(problem)
-        except _synthesis_errors() as e:  # e.g. a temporal goal; a bug propagates (exit 3)
+            compatible, message = synthesis.check_compatibility(problem)
+        except synthesis.input_errors as e:  # e.g. a temporal goal; a bug propagates (exit 3)
             diags.append(error("E0901", f"compatibility check of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
             return None
@@ -292,12 +298,15 @@ class Elaborator(Composition, ModelBackend):
         if problem is None:
             return None
         self.problems[inst] = problem
+        synthesis = self._solver("the controller", d.name, d.span, diags)
+        if synthesis is None:
+            return None
         try:
             from iterplan_compiler import limits
 
             limits.progress(f"synthesising {d.name}", 0)
-            result = synthesis_driver.synthesize(problem)
-        except _synthesis_errors() as e:  # synthesize reports these itself; a bug propagates
+            result = synthesis.synthesize(problem)
+        except synthesis.input_errors as e:  # synthesize reports these itself; a bug propagates
             diags.append(error("E0901", f"synthesis of {d.name} failed: "
                                f"{getattr(e, 'message', e)}", d.span))
             return None
@@ -314,11 +323,12 @@ class Elaborator(Composition, ModelBackend):
 
 
 
-def elaborate(spec: S.SpecFile, text: str, sources: dict[str, str] | None = None
-              ) -> tuple[Model, list[Diagnostic]]:
-    """Build the :class:`Model` of a parsed file (LTSs are built lazily)."""
+def elaborate(spec: S.SpecFile, text: str, sources: dict[str, str] | None = None,
+              synthesis: Synthesis | None = None) -> tuple[Model, list[Diagnostic]]:
+    """Build the :class:`Model` of a parsed file (LTSs are built lazily).  ``synthesis``
+    solves the controller composites a build needs (None: such builds report E0909)."""
     diags: list[Diagnostic] = []
-    el = Elaborator(spec, diags)
+    el = Elaborator(spec, diags, synthesis)
     consts: dict[str, int | float | str] = {k: (float(v) if isinstance(v, Fraction) else v)
                                  for k, v in el.consts.items()}
     model = Model(

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.synthesis.driver import synthesize
 
 REPO = Path(__file__).resolve().parents[2]

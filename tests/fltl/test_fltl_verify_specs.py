@@ -3,7 +3,7 @@
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.ir.minimise import bisimilar
 
 CONSTRAINT_TEST = """\

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 
 DIAG = re.compile(r"^(?P<file>[^\s:][^:]*?)(?::(?P<line>\d+):(?P<col>\d+))?: "
                   r"error\[(?P<code>[A-Z]\d+)\]: (?P<msg>.*)$", re.M)

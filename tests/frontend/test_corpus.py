@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend.elaborate import GAME_KEYWORDS, _cb_refs
 
 _SKIP_KW = GAME_KEYWORDS

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "diagnostics"
 MARK = re.compile(r"//\s*(error|warning):\s*([A-Z]\d{4})")

@@ -6,7 +6,7 @@ composition, the plant renamed ``C_#NC#``."""
 from __future__ import annotations
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend.operators import CONTROL_ACTION, eliminate_tau
 from iterplan_compiler.ir.alphabet_ops import is_deterministic
 from iterplan_compiler.ir.lts import ERROR, TAU, make_lts

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend.operators import (
     CONTROL_ACTION,
     STAR_ACTION,
