@@ -3,8 +3,8 @@
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.ir.minimise import bisimilar
+from iterplan_compiler.pipeline import load_model as load
 
 CONSTRAINT_TEST = """\
 constraint C1 = [] (p -> X q)

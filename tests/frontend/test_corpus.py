@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend.elaborate import GAME_KEYWORDS, _cb_refs
+from iterplan_compiler.pipeline import load_model as load
 
 _SKIP_KW = GAME_KEYWORDS
 

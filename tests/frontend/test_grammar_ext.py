@@ -4,10 +4,10 @@ bind (`[i:R]:P(i)`), literal numbers after a dot (`a.1`)."""
 from __future__ import annotations
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.printer import print_spec
+from iterplan_compiler.pipeline import load_model as load
 
 TEXT = """const N = 2
 P(I=0) = (a[I] -> b.1 -> P).

@@ -6,10 +6,10 @@ composition, the plant renamed ``C_#NC#``."""
 from __future__ import annotations
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.frontend.operators import CONTROL_ACTION, eliminate_tau
 from iterplan_compiler.ir.alphabet_ops import is_deterministic
 from iterplan_compiler.ir.lts import ERROR, TAU, make_lts
+from iterplan_compiler.pipeline import load_model as load
 
 # MTSA's Alphabet/lts_alphabet_hiding_compose.lts: M offers c3 twice (nondeterministic)
 HIDING_COMPOSE = """\
