@@ -19,7 +19,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="input format (default: by extension, .structuredslugs or slugsin)")
     parser.add_argument("--realizability-only", action="store_true",
                         help="decide realizability only: keep no iterates, build no strategy")
-    parser.add_argument("--order", choices=("interleaved", "blocked"), default="interleaved",
+    parser.add_argument("--order", choices=("interleaved", "blocked", "spec"), default="interleaved",
                         help="initial BDD variable order (default: x next to x')")
     parser.add_argument("--group-pairs", action="store_true",
                         help="reorder each variable together with its primed copy")
@@ -38,8 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="classic Z passes (no per-goal Z update / early fixpoint)")
     parser.add_argument("--no-early-unrealizable", action="store_true",
                         help="do not stop as soon as the initial states are lost")
-    parser.add_argument("--engine", choices=("native", "shared"), default="native",
-                        help="fixpoint implementation (shared = synthesis.fixpoint)")
+    parser.add_argument("--chained", action="store_true",
+                        help="Gauss-Seidel μY (realizability-only runs; see synthesis/fixpoint.py)")
     parser.add_argument("--json", action="store_true", help="print statistics as JSON")
 
 
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         feedback=not args.no_feedback,
         early_unrealizable=not args.no_early_unrealizable,
         recycle=args.recycle,
-        engine=args.engine,
+        chained=args.chained,
     )
     res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,
                        solver_options=sopt)

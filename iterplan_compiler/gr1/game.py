@@ -247,6 +247,35 @@ def _build_expr(bdd: Any, expr: Expr, memo: dict[int, Node]) -> Node:
     return memo[id(expr)]
 
 
+def spec_order(spec: SlugsSpec) -> list[str]:
+    """Variables in order of first occurrence in the spec's formulas (TRANS, then LIVENESS,
+    then INIT lines; left-to-right within a line), then any unused declared ones.
+
+    Variables that one transition line relates end up next to each other, which is what
+    keeps a conjunct's BDD small: with declaration order (all inputs, then all outputs) a
+    line family like ``b_i ∧ f_i → ¬b_i'`` (gr1c's lift) makes the conjunction of the lines
+    exponential in ``n`` until sifting repairs it.
+    """
+    seen: dict[str, None] = {}
+    for sec in ("ENV_TRANS", "SYS_TRANS", "ENV_LIVENESS", "SYS_LIVENESS", "ENV_INIT",
+                "SYS_INIT"):
+        for line in spec.lines(sec):
+            visited: set[int] = set()
+            stack = [line.expr]
+            while stack:
+                e = stack.pop()
+                if id(e) in visited:
+                    continue
+                visited.add(id(e))
+                if e.op == "var":
+                    seen.setdefault(e.name, None)
+                else:
+                    stack.extend(reversed(e.args))
+    for v in list(spec.inputs) + list(spec.outputs):
+        seen.setdefault(v, None)
+    return list(seen)
+
+
 def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
     if options.order == "blocked":
         bdd.declare(*names)
@@ -319,7 +348,8 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
     if options.max_growth is not None:
         cfg["max_growth"] = options.max_growth
     bdd.configure(**cfg)
-    _declare(bdd, list(spec.inputs) + list(spec.outputs), options)
+    names = spec_order(spec) if options.order == "spec" else list(spec.inputs) + list(spec.outputs)
+    _declare(bdd, names, options)
 
     memo: dict[int, Node] = {}
 
