@@ -167,23 +167,21 @@ class _StateOp:
     def __init__(self, bdd: Any, cpre: Callable[[Node], Node]) -> None:
         self.bdd, self.cpre = bdd, cpre
 
-    def not_assumption(self, a: Node, Z: Node) -> Node:
-        return ~a & Z
-
     def goal(self, g: Node, Z: Node) -> Node:
-        return g & self.cpre(Z) & Z
+        return g & self.cpre(Z)
 
     def base(self, goal: Node, Y: Node, Z: Node) -> Node:
-        return goal | (self.cpre(Y) & Z)
+        # not restricted to Z: every νX step is intersected with its start ⊆ Z anyway
+        return goal | self.cpre(Y)
 
     def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
         if not_a == self.bdd.false:
             return base
         return base | (not_a & self.cpre(X))
 
-    def floor(self, base: Node) -> Node:
-        """A state set every ``νX`` value contains."""
-        return base
+    def floor(self, base: Node, Z: Node) -> Node:
+        """A state set inside ``Z`` that every ``νX`` value contains."""
+        return base & Z
 
 
 class _TransitionOp:
@@ -191,9 +189,6 @@ class _TransitionOp:
 
     def __init__(self, bdd: Any, pre: TransitionPredecessor) -> None:
         self.bdd, self.pre = bdd, pre
-
-    def not_assumption(self, a: Node, Z: Node) -> Node:
-        return ~a  # transition-level: not restricted to current states in Z
 
     def goal(self, g: Node, Z: Node) -> Node:
         return g & self.pre.prime(Z)
@@ -206,8 +201,9 @@ class _TransitionOp:
             return self.pre.cpre_trans(base)
         return self.pre.cpre_trans(base | (not_a & self.pre.prime(X)))
 
-    def floor(self, base: Node) -> Node:
-        """A state set every ``νX`` value contains (``base`` is transition-level here)."""
+    def floor(self, base: Node, Z: Node) -> Node:
+        """A state set inside ``Z`` that every ``νX`` value contains (``base`` is
+        transition-level here, so: none)."""
         return self.bdd.false
 
 
@@ -240,12 +236,12 @@ def solve_gr1(
     """Winning region of ``(∧_i GF A_i) → (∧_j GF G_j)`` for ``pre``; see the module doc."""
     top = bdd.true if care is None else care
     op = _operator(bdd, pre, goals, options)
-    A = list(assumptions) or [bdd.true]
+    not_a = [~a for a in (list(assumptions) or [bdd.true])]
     states = [_Goal(g if goals is GoalKind.TRANSITION else g & top)
               for g in (list(guarantees) or [bdd.true])]
     stats = {"z": 0, "goals": 0, "y": 0, "x": 0}
     run = _feedback_passes if options.feedback else _classic_passes
-    Z, complete = run(bdd, op, A, states, top, keep_iterates, lost, options, stats, progress)
+    Z, complete = run(bdd, op, not_a, states, top, keep_iterates, lost, options, stats, progress)
     if not (keep_iterates and complete):
         return Gr1Fixpoint(Z, [], [], complete, stats)
     return Gr1Fixpoint(Z, [s.layers for s in states], [s.x_layers for s in states], True,
@@ -260,7 +256,7 @@ def _operator(bdd: Any, pre: Predecessor, goals: GoalKind, options: EngineOption
     return _StateOp(bdd, _Memo(pre.cpre, options.memo))
 
 
-def _feedback_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: Node,
+def _feedback_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
                      keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
                      stats: dict[str, int], progress: Callable[[str], None] | None
                      ) -> tuple[Node, bool]:
@@ -270,7 +266,7 @@ def _feedback_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: N
     j = 0
     while unchanged < n:
         limits.check_deadline()  # --time-limit inside the fixpoint
-        Y = _visit(bdd, op, A, states[j], Z, keep, options, stats)
+        Y = _visit(bdd, op, not_a, states[j], Z, keep, options, stats)
         if Y == Z:
             unchanged += 1
         else:
@@ -291,7 +287,7 @@ def _feedback_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: N
     return Z, True
 
 
-def _classic_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: Node,
+def _classic_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
                     keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
                     stats: dict[str, int], progress: Callable[[str], None] | None
                     ) -> tuple[Node, bool]:
@@ -301,7 +297,7 @@ def _classic_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: No
         stats["z"] += 1
         z_new = bdd.true
         for s in states:
-            z_new &= _visit(bdd, op, A, s, Z, keep, options, stats)
+            z_new &= _visit(bdd, op, not_a, s, Z, keep, options, stats)
         if progress:
             progress(f"gr1: Z-iteration {stats['z']}: |Z| nodes = {len(z_new)}")
         if z_new == Z:
@@ -311,15 +307,15 @@ def _classic_passes(bdd: Any, op: _Op, A: list[Node], states: list[_Goal], Z: No
             return Z, False
 
 
-def _visit(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, keep: bool,
+def _visit(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, keep: bool,
            options: EngineOptions, stats: dict[str, int]) -> Node:
     """One ``μY`` for goal ``s`` against ``Z``; updates its recycled values / iterates."""
     stats["goals"] += 1
     if options.chained and not keep:
-        x_rounds, Y = _mu_y_chained(bdd, op, A, s, Z, options.recycle, stats)
+        x_rounds, Y = _mu_y_chained(bdd, op, not_a, s, Z, options.recycle, stats)
         layers: list[Node] = []
     else:
-        layers, x_rounds, Y = _mu_y(bdd, op, A, s, Z, options.recycle, stats)
+        layers, x_rounds, Y = _mu_y(bdd, op, not_a, s, Z, options.recycle, stats)
     if options.recycle:
         s.recycled = x_rounds
     if keep:
@@ -327,19 +323,18 @@ def _visit(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, keep: bool,
     return Y
 
 
-def _start(s: _Goal, r: int, i: int, Z: Node, floor: Node, recycle: bool) -> Node:
+def _start(op: _Op, s: _Goal, r: int, i: int, Z: Node, base: Node, recycle: bool) -> Node:
     """Where ``νX`` for ``(r, i)`` starts: ``Z``, or its recycled value from the last visit
-    (∧ ``Z``, ∨ ``floor``, which the fixpoint contains anyway)."""
+    (∧ ``Z``, ∨ the part of ``base`` in ``Z``, which the fixpoint contains anyway)."""
     if recycle and r < len(s.recycled) and i < len(s.recycled[r]):
-        return (s.recycled[r][i] & Z) | floor
+        return (s.recycled[r][i] & Z) | op.floor(base, Z)
     return Z
 
 
-def _mu_y(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, recycle: bool,
+def _mu_y(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
           stats: dict[str, int]) -> tuple[list[Node], list[list[Node]], Node]:
     """Round-wise (Jacobi) ``μY``: ``(layers, x_layers, Y)``."""
     goal = op.goal(s.g, Z)
-    not_a = [op.not_assumption(a, Z) for a in A]
     Y = bdd.false
     layers: list[Node] = []
     x_layers: list[list[Node]] = []
@@ -347,10 +342,9 @@ def _mu_y(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, recycle: bool,
         limits.check_deadline()
         stats["y"] += 1
         base = op.base(goal, Y, Z)
-        floor = op.floor(base)
         xs = [_nu_x(bdd, op, base, not_a[i],
-                    _start(s, len(layers), i, Z, floor, recycle), stats)
-              for i in range(len(A))]
+                    _start(op, s, len(layers), i, Z, base, recycle), stats)
+              for i in range(len(not_a))]
         y_new = bdd.false
         for X in xs:
             y_new |= X
@@ -364,11 +358,10 @@ def _mu_y(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, recycle: bool,
             return layers, x_layers, Y
 
 
-def _mu_y_chained(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, recycle: bool,
+def _mu_y_chained(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
                   stats: dict[str, int]) -> tuple[list[list[Node]], Node]:
     """Gauss–Seidel ``μY`` (module doc): ``Y`` grows after every ``νX``; ``(x_rounds, Y)``."""
     goal = op.goal(s.g, Z)
-    not_a = [op.not_assumption(a, Z) for a in A]
     Y = bdd.false
     x_rounds: list[list[Node]] = []
     quiet = 0  # consecutive νX steps that did not grow Y
@@ -377,18 +370,17 @@ def _mu_y_chained(bdd: Any, op: _Op, A: list[Node], s: _Goal, Z: Node, recycle: 
         stats["y"] += 1
         xs: list[Node] = []
         x_rounds.append(xs)
-        for i in range(len(A)):
+        for i in range(len(not_a)):
             base = op.base(goal, Y, Z)
-            X = _nu_x(bdd, op, base, not_a[i], _start(s, len(x_rounds) - 1, i, Z,
-                                                    op.floor(base), recycle),
-                      stats)
+            X = _nu_x(bdd, op, base, not_a[i],
+                      _start(op, s, len(x_rounds) - 1, i, Z, base, recycle), stats)
             xs.append(X)
             y_new = (Y | X) & Z
             quiet = quiet + 1 if y_new == Y else 0
             Y = y_new
-            # Y == Z cannot grow; after len(A) quiet steps every νX was evaluated against
+            # Y == Z cannot grow; after len(not_a) quiet steps every νX was evaluated against
             # the current Y and stayed inside it: Y is the fixpoint.
-            if Y == Z or quiet == len(A):
+            if Y == Z or quiet == len(not_a):
                 return x_rounds, Y
 
 
