@@ -25,6 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="reorder each variable together with its primed copy")
     parser.add_argument("--no-reorder", action="store_true",
                         help="switch CUDD dynamic reordering off")
+    parser.add_argument("--no-sift-after-build", action="store_true",
+                        help="no explicit sifting pass between building the relations and "
+                        "the fixpoint (dynamic reordering only)")
     parser.add_argument("--max-growth", type=float, default=None,
                         help="CUDD sifting max growth (default: dd's 1.2)")
     parser.add_argument("--monolithic", action="store_true",
@@ -68,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
         order=args.order,
         group_pairs=args.group_pairs,
         reordering=not args.no_reorder,
+        sift_after_build=not args.no_sift_after_build,
         max_growth=args.max_growth,
         partition=not args.monolithic,
         cluster_nodes=args.cluster_nodes,
