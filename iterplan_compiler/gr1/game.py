@@ -30,16 +30,9 @@ from typing import Any
 
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec, variables_of
+from iterplan_compiler.symbolic import bdd as _bdd
 
 Node = Any
-
-try:  # the fused operators exist only in the CUDD bindings
-    from dd.cudd import and_exists as _cudd_and_exists
-    from dd.cudd import or_forall as _cudd_or_forall
-except ImportError:  # pragma: no cover - exercised only without dd.cudd
-    _cudd_and_exists = None
-    _cudd_or_forall = None
-
 
 def prime_name(name: str) -> str:
     """Name of the primed (next-state) BDD variable of ``name``."""
@@ -136,29 +129,19 @@ class Game:
     def prime(self, u: Node) -> Node:
         """Rename a *state* predicate (current variables only) to the next-state copy."""
         names = self.inputs + self.outputs
-        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
+        if _bdd.backend_of(self.bdd) == "cudd":
             # CUDD's variable swap is much cheaper than vector composition; it is exact
             # because ``u`` mentions no primed variable.
             return self.bdd._swap(u, {v: prime_name(v) for v in names})
         return self.bdd.let({v: self.bdd.var(prime_name(v)) for v in names}, u)
 
     def and_exists(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
-        """``∃ qvars. u ∧ v`` (fused in CUDD)."""
-        q = set(qvars)
-        if not q:
-            return u & v
-        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
-            return _cudd_and_exists(u, v, q)
-        return self.bdd.exist(q, u & v)
+        """``∃ qvars. u ∧ v`` (fused in CUDD; :func:`symbolic.bdd.and_exists`)."""
+        return _bdd.and_exists(self.bdd, u, v, qvars)
 
     def or_forall(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
-        """``∀ qvars. u ∨ v`` (fused in CUDD)."""
-        q = set(qvars)
-        if not q:
-            return u | v
-        if _cudd_or_forall is not None and hasattr(self.bdd, "_swap"):
-            return _cudd_or_forall(u, v, q)
-        return self.bdd.forall(q, u | v)
+        """``∀ qvars. u ∨ v`` (fused in CUDD; :func:`symbolic.bdd.or_forall`)."""
+        return _bdd.or_forall(self.bdd, u, v, qvars)
 
     def cpre_trans(self, target: Node) -> Node:
         """Mealy controllable predecessor of a transition-level target.
