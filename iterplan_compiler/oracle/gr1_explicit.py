@@ -196,10 +196,10 @@ def check_strategy(spec: SlugsSpec, strategy: Any) -> list[str]:
     for j, g in enumerate(G):
         keep = {(u, v) for u in edges for v in edges[u]
                 if not _live(game, g, *edge_state[(u, v)])}
-        def succ(u: tuple[State, int], keep: set[Any] = keep) -> list[tuple[State, int]]:
+        def kept_succ(u: tuple[State, int], keep: set[Any] = keep) -> list[tuple[State, int]]:
             return [v for v in edges[u] if (u, v) in keep]
 
-        for comp in _sccs(edges.keys(), succ):
+        for comp in _sccs(edges.keys(), kept_succ):
             inner = [(u, v) for u in comp for v in edges[u] if v in comp and (u, v) in keep]
             if not inner:
                 continue
