@@ -308,6 +308,15 @@ def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int
     return out, pre_q
 
 
+def _recluster(bdd: Any, parts: list[Part], pre_q: frozenset[str], qvars: Sequence[str],
+               options: GameOptions, support_of: Any) -> tuple[list[Part], frozenset[str]]:
+    """:func:`_schedule` again over existing clusters (same conjunction; a variable that
+    dropped out of every support joins the up-front quantified ones)."""
+    new_parts, new_pre = _schedule(bdd, [p.bdd for p in parts], qvars, options.cluster_nodes,
+                                   support_of)
+    return new_parts, pre_q | new_pre
+
+
 def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
                ) -> tuple[Game | None, list[Diagnostic]]:
     """Build the BDDs of ``spec`` into the (fresh) manager ``bdd``.
@@ -368,6 +377,11 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
         # lines b_i ∧ f_i → ¬b_i' had been split into 13 k-node clusters), the AMBA and
         # GenBuf families are unchanged or faster (docs/gr1.md).
         bdd.reorder()
+        if options.partition:
+            # clusters were cut at cluster_nodes under the build-time order; under the new
+            # one neighbouring clusters may conjoin small again (fewer CPre steps)
+            env_parts, env_pre = _recluster(bdd, env_parts, env_pre, xp, options, support_of)
+            sys_parts, sys_pre = _recluster(bdd, sys_parts, sys_pre, yp, options, support_of)
     primed = set(xp) | set(yp)
     live_primed = any(support_of(u) & primed for u in env_live + sys_live)
     game = Game(
