@@ -317,6 +317,28 @@ def _recluster(bdd: Any, parts: list[Part], pre_q: frozenset[str], qvars: Sequen
     return new_parts, pre_q | new_pre
 
 
+def _sift_after_build(bdd: Any, options: GameOptions, support_of: Any, xp: Sequence[str],
+                      yp: Sequence[str],
+                      parts: tuple[list[Part], frozenset[str], list[Part], frozenset[str]]
+                      ) -> tuple[list[Part], frozenset[str], list[Part], frozenset[str]]:
+    """One explicit sifting pass with the partitioned relations alive, then re-clustering.
+
+    Dynamic sifting during the build optimises the order for whatever is alive at the
+    time (single lines, partial formulas), and every reordering raises CUDD's next trigger
+    threshold, so the small fixpoint BDDs may never trigger a repair.  One pass now, with
+    exactly the relations the fixpoint uses alive, adapts the order to them: gr1c's lift
+    n=50 went from > 100 s to ~2 s CPU (its environment lines b_i ∧ f_i → ¬b_i' had been
+    cut into 13 k-node clusters; after the pass they conjoin to one of ~1 k nodes).  The
+    clusters were cut at ``cluster_nodes`` under the old order, so they are scheduled again.
+    """
+    env_parts, env_pre, sys_parts, sys_pre = parts
+    bdd.reorder()
+    if options.partition:
+        env_parts, env_pre = _recluster(bdd, env_parts, env_pre, xp, options, support_of)
+        sys_parts, sys_pre = _recluster(bdd, sys_parts, sys_pre, yp, options, support_of)
+    return env_parts, env_pre, sys_parts, sys_pre
+
+
 def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
                ) -> tuple[Game | None, list[Diagnostic]]:
     """Build the BDDs of ``spec`` into the (fresh) manager ``bdd``.
@@ -369,19 +391,8 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
     else:
         env_parts, env_pre, sys_parts, sys_pre = [], frozenset(), [], frozenset()
     if options.reordering and options.sift_after_build:
-        # Dynamic sifting during the build optimises the order for whatever is alive at the
-        # time (single lines, partial formulas), and every reordering raises CUDD's next
-        # trigger threshold, so the small fixpoint BDDs may never trigger a repair.  One
-        # sifting pass now, with exactly the relations the fixpoint uses alive, adapts the
-        # order to them: gr1c's lift n=50 went from > 100 s to 1.6 s CPU (its environment
-        # lines b_i ∧ f_i → ¬b_i' had been split into 13 k-node clusters), the AMBA and
-        # GenBuf families are unchanged or faster (docs/gr1.md).
-        bdd.reorder()
-        if options.partition:
-            # clusters were cut at cluster_nodes under the build-time order; under the new
-            # one neighbouring clusters may conjoin small again (fewer CPre steps)
-            env_parts, env_pre = _recluster(bdd, env_parts, env_pre, xp, options, support_of)
-            sys_parts, sys_pre = _recluster(bdd, sys_parts, sys_pre, yp, options, support_of)
+        env_parts, env_pre, sys_parts, sys_pre = _sift_after_build(
+            bdd, options, support_of, xp, yp, (env_parts, env_pre, sys_parts, sys_pre))
     primed = set(xp) | set(yp)
     live_primed = any(support_of(u) & primed for u in env_live + sys_live)
     game = Game(
