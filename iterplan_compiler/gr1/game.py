@@ -93,6 +93,8 @@ class Game:
     stats: dict[str, Any] = field(default_factory=dict)
 
     _mono: dict[str, Node] = field(default_factory=dict)
+    _swap_map: dict[str, str] | None = None
+    _is_cudd: bool = False
 
     @property
     def env_trans(self) -> Node:
@@ -128,12 +130,14 @@ class Game:
     # --- operators -------------------------------------------------------------------------
     def prime(self, u: Node) -> Node:
         """Rename a *state* predicate (current variables only) to the next-state copy."""
-        names = self.inputs + self.outputs
-        if _bdd.backend_of(self.bdd) == "cudd":
+        if self._swap_map is None:
+            self._swap_map = {v: prime_name(v) for v in self.inputs + self.outputs}
+            self._is_cudd = _bdd.backend_of(self.bdd) == "cudd"
+        if self._is_cudd:
             # CUDD's variable swap is much cheaper than vector composition; it is exact
             # because ``u`` mentions no primed variable.
-            return self.bdd._swap(u, {v: prime_name(v) for v in names})
-        return self.bdd.let({v: self.bdd.var(prime_name(v)) for v in names}, u)
+            return self.bdd._swap(u, self._swap_map)
+        return self.bdd.let({v: self.bdd.var(p) for v, p in self._swap_map.items()}, u)
 
     def and_exists(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
         """``∃ qvars. u ∧ v`` (fused in CUDD; :func:`symbolic.bdd.and_exists`)."""
@@ -275,8 +279,11 @@ def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
 
 
 def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int,
-              support_of) -> tuple[list[Part], frozenset[str]]:
-    """Cluster ``parts`` (in order) up to ``limit`` nodes; attach early-quantifiable vars."""
+              support_of, precheck: bool = False) -> tuple[list[Part], frozenset[str]]:
+    """Cluster ``parts`` (in order) up to ``limit`` nodes; attach early-quantifiable vars.
+
+    ``precheck``: do not even try a conjunction whose operands together exceed ``limit``
+    (re-clustering big clusters would otherwise conjoin them just to reject the result)."""
     clusters: list[Node] = []
     cur = None
     for p in parts:
@@ -285,8 +292,8 @@ def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int
         if cur is None:
             cur = p
             continue
-        cand = cur & p
-        if len(cand) <= limit:
+        cand = None if precheck and len(cur) + len(p) > limit else cur & p
+        if cand is not None and len(cand) <= limit:
             cur = cand
         else:
             clusters.append(cur)
@@ -313,7 +320,7 @@ def _recluster(bdd: Any, parts: list[Part], pre_q: frozenset[str], qvars: Sequen
     """:func:`_schedule` again over existing clusters (same conjunction; a variable that
     dropped out of every support joins the up-front quantified ones)."""
     new_parts, new_pre = _schedule(bdd, [p.bdd for p in parts], qvars, options.cluster_nodes,
-                                   support_of)
+                                   support_of, precheck=True)
     return new_parts, pre_q | new_pre
 
 
