@@ -27,6 +27,7 @@ from typing import Any
 from iterplan_compiler.diagnostics import Diagnostic
 from iterplan_compiler.gr1.game import Game, GameOptions, build_game
 from iterplan_compiler.gr1.slugsin import SlugsSpec
+from iterplan_compiler.gr1.strategy import build_strategy
 from iterplan_compiler.symbolic.bdd import new_manager
 from iterplan_compiler.synthesis.fixpoint import (
     SLUGS_OPTIONS,
@@ -114,8 +115,6 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
     strat = None
     stats: dict[str, Any] = dict(game.stats)
     if realizable and strategy:
-        from iterplan_compiler.gr1.strategy import build_strategy
-
         strat = build_strategy(game, win)
         stats["strategy_nodes"] = strat.node_count()
     t3 = time.perf_counter()
