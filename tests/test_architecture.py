@@ -35,7 +35,7 @@ LAYERS: dict[str, int] = {
     "gr1": 5,
     "backends": 6,
     "pipeline": 7,
-    "conformance": 8, "conformance_checks": 8, "experiments": 8,
+    "conformance": 8, "conformance_checks": 8, "experiments": 8, "oracle": 8,
     "view": 9, "mavproxy": 9, "commands": 9,
     "cli": 10, "__main__": 11,
 }

@@ -53,7 +53,7 @@ def _synthesis_plants(model: Model) -> dict[str, tuple[str, frozenset[str]]]:
     """``composite -> (spec name, plant alphabet)`` for every synthesis composite whose
     problem can be posed (one that cannot is reported by building it)."""
     from iterplan_compiler.diagnostics import has_errors
-    from iterplan_compiler.frontend.elaborate import SYNTHESIS_KEYWORDS
+    from iterplan_compiler.ir.model import SYNTHESIS_KEYWORDS
 
     out = {}
     for name in model.composites:

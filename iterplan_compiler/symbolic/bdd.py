@@ -83,6 +83,16 @@ def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
     return bdd.exist(qv, u & v)
 
 
+def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+    """``∀ qvars. u ∨ v`` — CUDD's fused operator when available (dual of :func:`and_exists`)."""
+    qv = set(qvars)
+    if not qv:
+        return u | v
+    if _cudd is not None and backend_of(bdd) == "cudd":
+        return _cudd.or_forall(u, v, qv)
+    return bdd.forall(qv, u | v)
+
+
 def bits_for(n: int) -> int:
     """Number of bits needed to encode the values ``0 .. n-1`` (at least 1)."""
     return max(1, (max(n, 1) - 1).bit_length())
