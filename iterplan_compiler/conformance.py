@@ -220,7 +220,8 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
     first).
     """
     import multiprocessing as mp
-    from multiprocessing.connection import wait
+    from multiprocessing.connection import Connection, wait
+    from multiprocessing.process import BaseProcess
 
     rows = list(rows)
     if "fork" not in mp.get_all_start_methods():
@@ -231,7 +232,7 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
     results: list[RowResult | None] = [None] * len(rows)
     deadline = None if budget is None else time.monotonic() + budget
     pending = list(range(len(rows)))
-    running: dict[object, tuple[int, object, float]] = {}  # conn -> (index, process, start)
+    running: dict[Connection, tuple[int, BaseProcess, float]] = {}  # conn -> (index, process, start)
 
     def finish(i: int, res: RowResult) -> None:
         results[i] = res
@@ -246,7 +247,7 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
                 finish(i, RowResult.whole(row, Status.TIMEOUT, "budget exhausted", 0.0))
                 continue
             recv, send = ctx.Pipe(duplex=False)
-            proc = ctx.Process(target=_child, args=(send, root, row), daemon=True)
+            proc: BaseProcess = ctx.Process(target=_child, args=(send, root, row), daemon=True)
             proc.start()
             send.close()
             running[recv] = (i, proc, time.monotonic())
@@ -256,6 +257,7 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
         next_expiry = min(start + timeout for _, _, start in running.values())
         ready = wait(list(running), timeout=max(0.0, next_expiry - now))
         for conn in ready:
+            assert isinstance(conn, Connection)
             i, proc, start = running.pop(conn)
             row = rows[i]
             try:
