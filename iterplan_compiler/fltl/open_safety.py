@@ -12,10 +12,12 @@ nothing MTSA accepts is rejected here.  Used by ``iterc check``/``synth`` and th
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error
+from iterplan_compiler.fltl import safety_cache
 from iterplan_compiler.fltl.emptiness import StateLimitExceeded
 from iterplan_compiler.fltl.progression import WILDCARD
 from iterplan_compiler.fltl.safety import DEFAULT_MAX_STATES, not_safety_witness, safety_dfa
@@ -36,6 +38,18 @@ def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
     if limits.formula_too_large(named.formula) is not None:
         return None  # building reports E0603
     cap = min(DEFAULT_MAX_STATES, limits.current().max_states)
+    key = safety_cache.cache_key(named, model.fluents, constraint=False, max_states=cap)
+    found, cached = safety_cache.load_witness(key)
+    if found:
+        return cached
+    started = time.process_time()
+    witness = _open_witness(named, model, cap)
+    if time.process_time() - started >= safety_cache.WORTH_CACHING_S:
+        safety_cache.store_witness(key, witness)
+    return witness
+
+
+def _open_witness(named: NamedFormula, model: Model, cap: int) -> str | None:
     wide = replace(named, extra_alphabet=named.extra_alphabet | {WILDCARD})
     try:
         closed, _, _ = safety_dfa(named, model.fluents, max_states=cap)

@@ -20,10 +20,12 @@ Construction (no per-pattern special cases):
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
+from iterplan_compiler.fltl import safety_cache
 from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
 from iterplan_compiler.fltl.progression import FormulaAutomaton, State
 from iterplan_compiler.fltl.semantics import UnknownFluentError
@@ -125,6 +127,12 @@ def safety_lts(
     if too_large is not None:
         return None, [error("E0603", f"{kind} {named.name}: {too_large}", named.span)]
     max_states = min(max_states, limits.current().max_states)
+    key = safety_cache.cache_key(named, fluents, constraint=constraint, max_states=max_states)
+    cached = safety_cache.load(key, named.name)
+    if cached is not None:
+        lts, unsatisfiable = cached
+        return lts, [_unsatisfiable(kind, named)] if unsatisfiable else []
+    started = time.process_time()
     try:
         dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
@@ -149,11 +157,17 @@ def safety_lts(
             named.span,
         )]
     if not subsets[0]:
-        diags.append(warning(W_UNSATISFIABLE, f"{kind} {named.name} is unsatisfiable: "
-                                              "every action violates it", named.span))
+        diags.append(_unsatisfiable(kind, named))
     lts = minimise(dfa, named.name)
     if constraint:
         lts = reachable(make_lts(lts.name, lts.num_states,
                                  [t for t in lts.transitions if t[2] != ERROR],
                                  lts.alphabet, lts.initial))
+    if time.process_time() - started >= safety_cache.WORTH_CACHING_S:
+        safety_cache.store(key, lts, not subsets[0])
     return lts, diags
+
+
+def _unsatisfiable(kind: str, named: NamedFormula) -> Diagnostic:
+    return warning(W_UNSATISFIABLE, f"{kind} {named.name} is unsatisfiable: every action "
+                                    "violates it", named.span)

@@ -29,6 +29,7 @@ from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.errors import Malformed, tok_span
 from iterplan_compiler.frontend.tree_to_ast import TreeToAst
+from iterplan_compiler.outputs import user_cache_dir
 
 _MAX_ERRORS = 50
 
@@ -47,19 +48,12 @@ def _cache_file(grammar: str) -> str | bool:
     version, so installs with different grammars (several checkouts, an upgrade) keep their
     own tables instead of rebuilding and overwriting one file in turn; Lark also checks the
     hash stored inside and rebuilds a stale or unreadable file.  ``ITERPLAN_NO_CACHE=1`` or an
-    unwritable home disable it."""
-    if os.environ.get("ITERPLAN_NO_CACHE"):
-        return False
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    folder = os.path.join(base, "iterplan")
-    try:
-        os.makedirs(folder, exist_ok=True)
-    except OSError:
-        return False
-    if not os.access(folder, os.W_OK):
+    unwritable home disable it (:func:`~iterplan_compiler.outputs.user_cache_dir`)."""
+    folder = user_cache_dir("lark")
+    if folder is None:
         return False
     key = hashlib.sha256(f"{lark.__version__}\n{grammar}".encode()).hexdigest()[:16]
-    return os.path.join(folder, f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}-{key}.pickle")
+    return os.path.join(str(folder), f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}-{key}.pickle")
 
 
 @functools.lru_cache(maxsize=1)
