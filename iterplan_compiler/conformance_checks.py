@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from iterplan_compiler.diagnostics import Diagnostic, Severity
+from iterplan_compiler.ir.model import Unrealizable
 
 if TYPE_CHECKING:
     from iterplan_compiler.ir.lts import LTS
@@ -152,7 +153,7 @@ class Context:
                 self._synth[name] = (res, list(diags) + list(res.diagnostics))
         return self._synth[name]
 
-    def build(self, name: str, unrealizable: str = "error") -> tuple[LTS | None, list[Diagnostic]]:
+    def build(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR) -> tuple[LTS | None, list[Diagnostic]]:
         key = f"{name}\0{unrealizable}"
         if key not in self._built:
             self._built[key] = self.model.build_lts(name, unrealizable=unrealizable)
@@ -246,7 +247,7 @@ def builds(composite: str) -> Check:
         names = set(ctx.model.names()) | {"DEFAULT"}
         if composite not in names:
             return CheckResult(name, Status.ERROR, "no such composite in the file")
-        lts, diags = ctx.build(composite, unrealizable="plant")
+        lts, diags = ctx.build(composite, unrealizable=Unrealizable.PLANT)
         errs = errors_of(diags)
         if errs and all(d.code == SYNTHESIS_CODE for d in errs):
             # a synthesis failure (e.g. an unrealizable controller used inside this
@@ -267,7 +268,7 @@ def never_fails(composite: str) -> Check:
     def run(ctx: Context) -> CheckResult:
         if composite not in ctx.model.names():
             return CheckResult(name, Status.ERROR, "no such composite in the file")
-        lts, diags = ctx.build(composite, unrealizable="plant")
+        lts, diags = ctx.build(composite, unrealizable=Unrealizable.PLANT)
         got = first_error(diags) or (f"{lts.num_states} states" if lts is not None else "")
         return CheckResult(name, Status.PASS, got)
 
@@ -280,7 +281,7 @@ def alphabet(composite: str, expected: frozenset[str]) -> Check:
 
     def run(ctx: Context) -> CheckResult:
         # an unrealizable controller composite composes to the plant C_#NC# (§3.7)
-        lts, diags = ctx.build(composite, unrealizable="plant")
+        lts, diags = ctx.build(composite, unrealizable=Unrealizable.PLANT)
         if lts is None or errors_of(diags):
             return _problem(name, diags, "building")
         got = frozenset(lts.alphabet)

@@ -38,16 +38,14 @@ from iterplan_compiler.frontend.expressions import (
 )
 from iterplan_compiler.frontend.processes import build_process
 from iterplan_compiler.ir.lts import LTS, reachable, renamed
-from iterplan_compiler.ir.model import (
-    SynthesisProblem,
-)
+from iterplan_compiler.ir.model import SynthesisProblem, Unrealizable
 
 
 class Composition(Declarations):
     """Builds the LTSs of processes and composites on demand."""
 
-    def build_lts(self, name: str, unrealizable: str = "error", solve: bool = True
-                  ) -> tuple[LTS | None, list[Diagnostic]]:
+    def build_lts(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR,
+                  solve: bool = True) -> tuple[LTS | None, list[Diagnostic]]:
         """See :meth:`Model.build_lts`."""
         if not solve and self.solving:
             saved = self.cache
@@ -69,7 +67,7 @@ class Composition(Declarations):
             d = self.composites.get(name) or self.processes.get(name)
             span = d.span if d is not None else Span(self.spec.path, 0, 0)
             return None, [error(e.code, f"building {name}: {e.message}", span)]
-        if unrealizable == "plant" and lts is None and name in self.unrealizable:
+        if unrealizable is Unrealizable.PLANT and lts is None and name in self.unrealizable:
             plant, ds = self.unrealizable_plant(name)
             if plant is not None:
                 # the verdict stays visible, as a warning: the caller asked for the plant

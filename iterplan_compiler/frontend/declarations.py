@@ -136,7 +136,7 @@ class Declarations:
         # and again as a component of another composite is synthesised once
         self.synth_cache: dict[str, tuple[LTS | None, list[Diagnostic]]] = {}
         # the problem each synthesised instance was solved as (after §3.8), and the instances
-        # found unrealizable: `build_lts(name, unrealizable="plant")` returns their plant
+        # found unrealizable: `build_lts(name, Unrealizable.PLANT)` returns their plant
         self.problems: dict[str, SynthesisProblem] = {}
         self.unrealizable: set[str] = set()
         self.building: list[str] = []

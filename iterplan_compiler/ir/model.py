@@ -7,6 +7,7 @@ synthesis and must keep their field names.
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -16,6 +17,15 @@ from iterplan_compiler.ir.lts import LTS
 
 #: Composite keywords that make a composite a synthesis problem (MTSA §1.11, §3.9, §3.10):
 #: building it solves a game.  (``checkCompatibility`` also poses the game, without solving.)
+
+class Unrealizable(enum.Enum):
+    """What building an unrealizable ``controller`` composite gives."""
+
+    #: error E0901, no LTS (``iterc`` commands)
+    ERROR = "error"
+    #: MTSA's composition: the plant the game was played on, ``C_#NC#``, and warning W0902
+    PLANT = "plant"
+
 SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector"})
 
 
@@ -84,8 +94,8 @@ class ModelBackend:
     elaborator, ``frontend/elaborate.py``).  Kept abstract here so ``ir`` does not import the
     front-end."""
 
-    def build_lts(self, name: str, unrealizable: str = "error", solve: bool = True
-                  ) -> tuple[LTS | None, list[Diagnostic]]:  # pragma: no cover - interface
+    def build_lts(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR,
+                  solve: bool = True) -> tuple[LTS | None, list[Diagnostic]]:  # pragma: no cover
         raise NotImplementedError
 
     def synthesis_problem(self, name: str) -> tuple[SynthesisProblem | None, list]:  # pragma: no cover
@@ -156,12 +166,12 @@ class Model:
             return self.processes[-1]
         return None
 
-    def build_lts(self, name: str, unrealizable: str = "error", solve: bool = True
-                  ) -> tuple[LTS | None, list[Diagnostic]]:
+    def build_lts(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR,
+                  solve: bool = True) -> tuple[LTS | None, list[Diagnostic]]:
         """Build (compose, apply operators, synthesise when asked) the named machine.
 
         An unrealizable ``controller`` composite is an error (E0901, no LTS) by default; with
-        ``unrealizable="plant"`` it gives MTSA's composition instead: the plant the game was
+        ``unrealizable=Unrealizable.PLANT`` it gives MTSA's composition instead: the plant the game was
         played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
         W0902.  With ``solve=False`` nothing is synthesised: a synthesis composite (also one
         used as a component) gives the plant its game is played on, under its own name
