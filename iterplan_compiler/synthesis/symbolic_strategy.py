@@ -32,8 +32,8 @@ from collections.abc import Callable
 from typing import Any
 
 from iterplan_compiler.ir.lts import LTS, make_lts
-from iterplan_compiler.synthesis.explicit import ProductMoves
 from iterplan_compiler.synthesis.strategy import PERMISSIVE_PREFIX
+from iterplan_compiler.synthesis.symbolic_eval import CachedMoves, CompiledSets, RankTable
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
 
 Node = Any
@@ -71,53 +71,48 @@ def rank_layers(g: SymbolicGame, W: Node, goal: Node, A: list[Node]) -> list[Nod
 
 
 class _Oracle:
-    """Membership and rank queries on state tuples, cached per tuple."""
+    """Membership and rank queries on state tuples: each set compiled once
+    (:class:`symbolic_eval.CompiledSets`), ranks cached per (state, guarantee)."""
 
     def __init__(self, g: SymbolicGame, W: Node, layers: list[list[Node]]) -> None:
         self.g, self.W, self.layers = g, W, layers
-        self._cube: dict[State, Node] = {}
+        self._sets = CompiledSets(g.bdd, g.cur)
+        self._roots: dict[int, tuple[Node, int]] = {}  # id(set) -> (set kept alive, root)
+        self._w = self._root(W)
+        self._tables = [RankTable(self._sets, [self._root(u) for u in js], _INF)
+                        for js in layers]
         self._rank: dict[tuple[State, int], int] = {}
-        self._memo: dict[tuple[int, State], bool] = {}
+
+    def _root(self, u: Node) -> int:
+        hit = self._roots.get(id(u))
+        if hit is None:
+            hit = self._roots[id(u)] = (u, self._sets.add(u))
+        return hit[1]
 
     def has(self, u: Node, s: State) -> bool:
-        """``s ∈ u`` as ``cube(s) ≤ u``, memoised per (set, state): the sets queried are a
-        fixed handful (W, G_j, F, A_i, the layers), kept alive by the oracle, so ``id`` is a
-        stable key."""
-        key = (id(u), s)
-        r = self._memo.get(key)
-        if r is None:
-            cube = self._cube.get(s)
-            if cube is None:
-                cube = self._cube[s] = self.g.state_cube(s)
-            r = self._memo[key] = bool(cube <= u)
-        return r
+        """``s ∈ u`` (``u`` compiled on first use; the sets asked about are a fixed handful,
+        kept alive by the oracle, so ``id`` is a stable key)."""
+        return self._sets.member(self._root(u), s)
 
     def below(self, j: int, k: int, s: State | None) -> bool:
         """``r_j(s) ≤ k`` (False for ``k < 0`` and for losing / ERROR states)."""
         if s is None or k < 0:
             return False
-        layers = self.layers[j]
-        return self.has(layers[min(k, len(layers) - 1)], s)
+        return self.rank(j, s) <= k
 
     def winning(self, s: State | None) -> bool:
-        return s is not None and self.has(self.W, s)
+        return s is not None and self._sets.member(self._w, s)
 
     def rank(self, j: int, s: State | None) -> int:
-        """Index of the first layer holding ``s`` (``len(layers)`` = ∞)."""
-        layers = self.layers[j]
-        if s is None or not self.winning(s):
+        """Index of the first layer holding ``s`` (∞ outside ``W``, the last layer): one
+        walk of the guarantee's :class:`symbolic_eval.RankTable`, cached per (state,
+        guarantee)."""
+        if s is None:
             return _INF
         key = (s, j)
         r = self._rank.get(key)
         if r is None:
-            lo, hi = 0, len(layers) - 1
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if self.has(layers[mid], s):
-                    hi = mid
-                else:
-                    lo = mid + 1
-            r = self._rank[key] = lo
+            r = self._rank[key] = self._tables[j].rank(s)
         return r
 
 
@@ -136,7 +131,7 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
     orc = _Oracle(g, W, layers)
     n = len(G)
     ctrl = g.spec.controllable
-    pm = ProductMoves(g.spec.components)
+    pm = CachedMoves(g.spec.components)
     start: tuple[State | None, int] = (pm.start, 0)
     index: dict[tuple[State | None, int], int] = {start: 0}
     order = [start]
