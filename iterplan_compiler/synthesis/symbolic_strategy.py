@@ -79,8 +79,8 @@ class _Oracle:
         self._sets = CompiledSets(g.bdd, g.cur)
         self._roots: dict[int, tuple[Node, int]] = {}  # id(set) -> (set kept alive, root)
         self._w = self._root(W)
-        self._tables = [RankTable(self._sets, [self._root(u) for u in js], _INF)
-                        for js in layers]
+        self._tables = [RankTable(self._sets, js, f"_rank{j}", _INF)
+                        for j, js in enumerate(layers)]
         self._rank: dict[tuple[State, int], int] = {}
 
     def _root(self, u: Node) -> int:
