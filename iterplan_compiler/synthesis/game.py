@@ -28,6 +28,9 @@ __all__ = ["ORDERS", "SymbolicGame", "nonblocking_symbolic", "solve_symbolic", "
 #: reachability is abandoned (the fixpoint then runs over all valid states) once the reached
 #: set's BDD grows past this many nodes — see :meth:`SymbolicGame.reachable`
 REACH_MAX_NODES = 200_000
+#: games with more reachable states get no counter-strategy trace
+EXPLAIN_MAX_STATES = 50_000
+_TOO_LARGE = "\n(game too large for a counter-strategy trace; try a smaller instance)"
 
 
 def subgame(g: SymbolicGame, region: Any, *, limit: int | None = None) -> ExplicitGame:
@@ -128,8 +131,11 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
                                            quotient=False)
+            states = stats.get("game_states")
             if ok or not explain:
                 return ok, ctrl, why
+            if not isinstance(states, int) or states > EXPLAIN_MAX_STATES:
+                return ok, ctrl, why + _TOO_LARGE  # no trace past the bound anyway
     g = SymbolicGame(spec, order=order)
     stats["bdd_backend"] = type(g.bdd).__module__
     stats["order"] = order
@@ -230,8 +236,8 @@ def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool) -> str
                 f"game states are losing)")
     if not explain:
         return head
-    if g.reach is None or g.count(reach) > 50_000:
-        return head + "\n(game too large for a counter-strategy trace; try a smaller instance)"
+    if g.reach is None or g.count(reach) > EXPLAIN_MAX_STATES:
+        return head + _TOO_LARGE
     from iterplan_compiler.synthesis.explain import explain_losing
     from iterplan_compiler.synthesis.explicit import build_game
 
