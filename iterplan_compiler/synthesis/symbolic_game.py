@@ -51,7 +51,7 @@ from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 
 ORDERS = ("action_first", "clustered", "action_last", "blocked")
 #: see :meth:`SymbolicGame._cluster`
-CLUSTER_MAX_NODES = 100_000
+CLUSTER_MAX_NODES = 250_000
 #: see :func:`quotient_leaves`
 QUOTIENT_MAX_STATES = 1_000
 #: components per cached partial cube in :meth:`SymbolicGame.state_cube`
@@ -262,7 +262,11 @@ class SymbolicGame:
         Trade-off, measured on SYNTECH15 GyroLTL_486 (7 groups of 18/13/... owners): renaming
         ``X`` once per group cost 4.7 s of fixpoint against 0.7 s with one framed relation per
         controllability (one shared rename per CPre); on GyroLTL_637 the framed controllable
-        relation has 550 k nodes, so there the groups stay partitioned."""
+        relation has 550 k nodes, so there the groups stay partitioned.  The bound was 100 k
+        until Fire Patrol N = 14, whose framed controllable relation has ~100 k nodes: kept
+        partitioned (4 groups) its fixpoint took 13.1 s CPU, framed (2 groups) 3.2 s (N = 13,
+        52 k nodes framed: 1.1 s).  At 250 k no SYNTECH15 file changes grouping (their
+        framed relations are under 70 k nodes or over 250 k)."""
         b = self.bdd
         out: list[Group] = []
         all_n = frozenset(self.nxt_vars)

@@ -77,13 +77,15 @@ class _Oracle:
     def __init__(self, g: SymbolicGame, W: Node, layers: list[list[Node]]) -> None:
         self.g, self.W, self.layers = g, W, layers
         self._sets = CompiledSets(g.bdd, g.cur)
+        self.member = self._sets.member  # member(root, state)
         self._roots: dict[int, tuple[Node, int]] = {}  # id(set) -> (set kept alive, root)
-        self._w = self._root(W)
+        self._w = self.root(W)
         self._tables = [RankTable(self._sets, js, f"_rank{j}", _INF)
                         for j, js in enumerate(layers)]
         self._rank: dict[tuple[State, int], int] = {}
 
-    def _root(self, u: Node) -> int:
+    def root(self, u: Node) -> int:
+        """The compiled root of ``u`` (compiled on first use)."""
         hit = self._roots.get(id(u))
         if hit is None:
             hit = self._roots[id(u)] = (u, self._sets.add(u))
@@ -92,7 +94,7 @@ class _Oracle:
     def has(self, u: Node, s: State) -> bool:
         """``s ∈ u`` (``u`` compiled on first use; the sets asked about are a fixed handful,
         kept alive by the oracle, so ``id`` is a stable key)."""
-        return self._sets.member(self._root(u), s)
+        return self._sets.member(self.root(u), s)
 
     def below(self, j: int, k: int, s: State | None) -> bool:
         """``r_j(s) ≤ k`` (False for ``k < 0`` and for losing / ERROR states)."""
@@ -141,6 +143,11 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
     from iterplan_compiler import limits
 
     cap = limits.current().max_states   # the controller is enumerated explicitly
+    # the fixed sets' compiled roots, looked up once (the loop runs once per controller state)
+    member = orc.member
+    g_roots = [orc.root(u) for u in G]
+    a_roots = [orc.root(u) for u in A]
+    f_root, w_root = orc.root(F), orc.root(W)
     while q:
         if len(index) > cap:
             raise limits.LimitReached("max_states", limits.states_message(
@@ -151,18 +158,19 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
         k = index[(s, j)]
         if s is None:
             continue
-        in_g = orc.has(G[j], s)
+        in_g = member(g_roots[j], s)
         jn = (j + 1) % n if in_g else j
-        may_increase = in_g or orc.has(F, s)
+        may_increase = in_g or member(f_root, s)
         rs = orc.rank(j, s)
-        rest_a = not orc.has(A[rs % m], s)
+        rest_a = not member(a_roots[rs % m], s)
         for a, t in pm.moves(s):  # distinct, in a fixed order
             if a not in ctrl:
                 ok = True
             elif may_increase:
-                ok = orc.winning(t)
+                ok = t is not None and member(w_root, t)
             else:  # r_j(t) < r_j(s), or equal and s outside A_{a(r_j(s))}
-                ok = orc.below(j, rs - 1, t) or (rest_a and orc.below(j, rs, t))
+                rt = orc.rank(j, t)
+                ok = rt < rs or (rest_a and rt == rs)
             label = a
             if not ok:
                 if not (permissive and a in ctrl and orc.winning(t)):
