@@ -205,7 +205,7 @@ class CachedMoves:
                         out.append((a, None))
                         continue
                     nxt = list(cur)
-                    for k, t in zip(parts, combo):
+                    for k, t in zip(parts, combo, strict=True):
                         nxt[k] = t
                     out.append((a, tuple(nxt)))
         for k in range(self.n):

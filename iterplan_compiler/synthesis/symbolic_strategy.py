@@ -17,9 +17,12 @@ stops once ``S_j[k] = W``; ``m`` steps without growth would mean a solver bug.  
 layers is the controller's depth, not the game size.
 
 Controller.  From ``(s0, 0)`` the controller states ``(s, j)`` are enumerated breadth-first;
-the moves of ``s`` come from the components' own transitions (:class:`explicit.ProductMoves`),
-and each target is classified by BDD membership tests (a rank is a binary search over the
-layers).  So the explicit work is proportional to the controller, not to the game.  The rule
+the moves of ``s`` come from the components' own transitions (:class:`symbolic_eval.CachedMoves`),
+and each target is classified against the fixed sets compiled for Python-speed walks
+(:class:`symbolic_eval.CompiledSets`; a rank is one walk of :class:`symbolic_eval.RankTable`).
+So the explicit work is proportional to the controller, not to the game (Fire Patrol N = 14:
+~60 µs CPU per controller state, against ~300 µs with ``dd`` cube tests, a binary search over
+the layers and unmemoised moves; measured figures in :mod:`symbolic_eval`).  The rule
 is exactly :func:`strategy.extract_controller`'s (§3.6): every uncontrollable successor; the
 controllable ones that are better by rank (any winning one from a "may increase" state);
 with ``permissive``, winning but not better controllable moves as ``#w#_a``.

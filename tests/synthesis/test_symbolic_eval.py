@@ -111,8 +111,8 @@ def test_cached_moves_are_product_moves():
 def test_quotient_keeps_the_controller(prob):
     """Solving over the quotiented body machines gives the same verdict and a bisimilar
     controller (module doc of symbolic_game.quotient_leaves)."""
-    from iterplan_compiler.synthesis.game import solve_symbolic
     from iterplan_compiler.synthesis.driver import _minimise
+    from iterplan_compiler.synthesis.game import solve_symbolic
 
     spec = prepare(prob)
     runs = [solve_symbolic(spec, {}, lambda _m: None, explain=False, name="C", quotient=q)
