@@ -35,7 +35,7 @@ from iterplan_compiler.ir.lts import ERROR, LTS
 E_DEADLOCK = "E1301"
 E_ERROR = "E1302"
 E_PROGRESS = "E1303"
-E_NO_TARGET = "E504"  # as `iterc lts`/`iterc dot`: the same mistake gets the same code
+E_NO_TARGET = "E0104"  # as `iterc lts`/`iterc dot`: the same mistake gets the same code
 
 
 def decl_span(model, name: str) -> Span:

@@ -32,10 +32,10 @@ from iterplan_compiler.ir.lts import ERROR, LTS, make_lts, reachable
 from iterplan_compiler.ir.minimise import minimise
 
 # Stable diagnostic codes of the FLTL stage.
-E_UNKNOWN_FLUENT = "E301"
-E_NOT_SAFETY = "E302"
-E_TOO_LARGE = "E303"
-W_UNSATISFIABLE = "W301"
+E_UNKNOWN_FLUENT = "E0604"
+E_NOT_SAFETY = "E0605"
+E_TOO_LARGE = "E0606"
+W_UNSATISFIABLE = "W0604"
 
 DEFAULT_MAX_STATES = 200_000
 
@@ -115,9 +115,9 @@ def safety_lts(
     """Compile an ``ltl_property`` (``constraint=False``) or ``constraint`` into its minimal
     deterministic safety LTS over Σφ (+ ``named.extra_alphabet``).
 
-    Returns ``(None, [error])`` for an unknown fluent (E301), a formula that is not a safety
-    formula (E302, with a witness trace) or an automaton beyond ``max_states`` (E303).  An
-    unsatisfiable formula gives a warning (W301): every action leads to ERROR.
+    Returns ``(None, [error])`` for an unknown fluent (E0604), a formula that is not a safety
+    formula (E0605, with a witness trace) or an automaton beyond ``max_states`` (E0606).  An
+    unsatisfiable formula gives a warning (W0604): every action leads to ERROR.
     """
     kind = "constraint" if constraint else "ltl_property"
     diags: list[Diagnostic] = []

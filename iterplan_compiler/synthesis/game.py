@@ -168,7 +168,11 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["winning_bdd_nodes"] = len(W)
     _peak(g, stats)
     if (g.init & W) == g.bdd.false:
-        return False, None, _explain_symbolic(g, care, W, explain)
+        if explain and not fp.complete:
+            # stopped early (must_contain): W is a superset of the winning region; the
+            # explanation's counts and play need the exact one (as the explicit solver has)
+            W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live).winning & care
+        return False, None, _explain_symbolic(g, care, W, explain, exact=explain or fp.complete)
     if reach is not None:
         stats["winning_states"] = g.count(W)
         _check_controller_bound(stats["winning_states"] * len(goals), name)
@@ -227,13 +231,14 @@ def _solve_nonblocking(g: SymbolicGame, reach: Any, stats: dict[str, Any], expla
     return True, ctrl, ""
 
 
-def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool) -> str:
-    if g.reach is None:
-        head = "unrealizable: the initial state is losing (game too large to count states)"
+def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool,
+                      exact: bool = True) -> str:
+    from iterplan_compiler.synthesis.explain import losing_head
+
+    if g.reach is None or not exact:
+        head = losing_head(None, None)
     else:
-        losing = g.count(reach & ~W & ~g.error)
-        head = (f"unrealizable: the initial state is losing ({losing} reachable non-ERROR "
-                f"game states are losing)")
+        head = losing_head(g.count(reach & ~W & ~g.error), g.count(reach & ~g.error))
     if not explain:
         return head
     if g.reach is None or g.count(reach) > EXPLAIN_MAX_STATES:

@@ -184,9 +184,9 @@ def test_verify_state_limit_is_a_diagnostic(capsys):
     res = run_cli(capsys, "verify", FIRE, "--assert", "VisitCondition", "--on",
                   "FirePatrolSystem", "--max-states", "3")
     # --max-states (limits.py) bounds composition, formula automata and the model-checking
-    # product; whichever is built first reports it (E0402 composition, E303 formula automaton)
+    # product; whichever is built first reports it (E0402 composition, E0606 formula automaton)
     try:
         m = assert_input_error(res, FIRE, code="E0402", located=True)
     except AssertionError:
-        m = assert_input_error(res, FIRE, code="E303", located=True)
+        m = assert_input_error(res, FIRE, code="E0606", located=True)
     assert "exceeds 3 states" in m["msg"] and "--max-states" in m["msg"]

@@ -95,10 +95,11 @@ def exercise(path: str, text: str) -> None:
 
 @pytest.fixture
 def small_limits(monkeypatch):
-    from iterplan_compiler.frontend import elaborate
+    from iterplan_compiler.frontend import declarations
 
     # The front-end's composition cap; a mutated range can otherwise ask for millions of states.
-    monkeypatch.setattr(elaborate, "MAX_STATES", 3000, raising=False)
+    # (This patched the `elaborate` *function* before: `frontend.elaborate` is not the module.)
+    monkeypatch.setattr(declarations, "MAX_STATES", 3000)
 
 
 @settings(max_examples=150, deadline=None, derandomize=True,

@@ -17,9 +17,9 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.frontend import load
-from iterplan_compiler.frontend.elaborate import SYNTHESIS_KEYWORDS, _cb_refs
+from iterplan_compiler.frontend.elaborate import GAME_KEYWORDS, _cb_refs
 
-_SKIP_KW = SYNTHESIS_KEYWORDS
+_SKIP_KW = GAME_KEYWORDS
 
 
 def _needs_synthesis(model, name: str, seen: frozenset[str] = frozenset()) -> bool:

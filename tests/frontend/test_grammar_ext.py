@@ -55,7 +55,11 @@ def test_parser_cache_location(monkeypatch, tmp_path):
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv("ITERPLAN_NO_CACHE", raising=False)
-    path = parse._cache_file()
+    path = parse._cache_file("start: A")
     assert isinstance(path, str) and path.startswith(str(tmp_path / "iterplan"))
+    # one file per grammar: checkouts with different grammars do not overwrite each other
+    other = parse._cache_file("start: B")
+    assert isinstance(other, str) and other != path
+    assert parse._cache_file("start: A") == path
     monkeypatch.setenv("ITERPLAN_NO_CACHE", "1")
-    assert parse._cache_file() is False
+    assert parse._cache_file("start: A") is False
