@@ -3,8 +3,9 @@
 A graph is given implicitly by initial nodes and a successor function returning
 ``(label, target, mask)`` triples; ``full_mask`` is the union of the acceptance bits.  An SCC is
 *accepting* iff it has an internal edge and its internal edges together carry every bit of
-``full_mask``.  SCCs come from an iterative Tarjan (:func:`_sccs`, no recursion limit on deep
-product graphs) and are ordered by Kahn's algorithm with a heap (:func:`_topological`).  These
+``full_mask``.  SCCs come from the compiler's one SCC routine
+(:mod:`iterplan_compiler.ir.graphs`, no recursion limit on deep product graphs) and are
+ordered by Kahn's algorithm with a heap (:func:`_topological`).  These
 were networkx's ``condensation`` and ``lexicographical_topological_sort``; importing networkx
 cost 0.15-0.3 s, paid by every ``iterc`` run with an ``ltl_property``, for 40 lines of graph
 code (the order produced is the same: ties broken by the breadth-first discovery index).
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from iterplan_compiler import limits
+from iterplan_compiler.ir.graphs import strongly_connected
 
 #: a graph node: any hashable value (the callers' product states are tuples, which they
 #: unpack, so the alias is ``Any`` rather than ``Hashable``)
@@ -110,48 +112,10 @@ def analyse(
 
 def _sccs(nodes: list[Node], adj: dict[Node, list[Edge]]
           ) -> tuple[list[list[Node]], dict[Node, int]]:
-    """Strongly connected components (Tarjan, with an explicit stack): ``(members, comp_of)``."""
-    index: dict[Node, int] = {}
-    low: dict[Node, int] = {}
-    on_stack: set[Node] = set()
-    stack: list[Node] = []
-    members: list[list[Node]] = []
-    comp_of: dict[Node, int] = {}
-    for root in nodes:
-        if root in index:
-            continue
-        work: list[tuple[Node, int]] = [(root, 0)]
-        index[root] = low[root] = len(index)
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            v, i = work[-1]
-            es = adj[v]
-            if i < len(es):
-                work[-1] = (v, i + 1)
-                w = es[i][1]
-                if w not in index:
-                    index[w] = low[w] = len(index)
-                    stack.append(w)
-                    on_stack.add(w)
-                    work.append((w, 0))
-                elif w in on_stack:
-                    low[v] = min(low[v], index[w])
-                continue
-            work.pop()
-            if work:
-                u = work[-1][0]
-                low[u] = min(low[u], low[v])
-            if low[v] == index[v]:
-                comp: list[Node] = []
-                while True:
-                    w = stack.pop()
-                    on_stack.discard(w)
-                    comp_of[w] = len(members)
-                    comp.append(w)
-                    if w == v:
-                        break
-                members.append(comp)
+    """Strongly connected components (:func:`~iterplan_compiler.ir.graphs.strongly_connected`):
+    ``(members, comp_of)``."""
+    members = strongly_connected(nodes, lambda v: [e[1] for e in adj[v]])
+    comp_of = {v: k for k, comp in enumerate(members) for v in comp}
     return members, comp_of
 
 

@@ -12,8 +12,8 @@ inputs (sets sorted, spans left out: moving a declaration does not invalidate it
 translation's own source is hashed in, so a changed translator never reads an old entry).
 Only successful translations that took at least :data:`WORTH_CACHING_S` are stored (errors
 and warnings are recomputed or derived: W0604 from the stored "unsatisfiable" bit); the
-open-alphabet safety test of :mod:`.open_safety` (E0605) keeps its witness the same way.  Entries are JSON (never pickles), written
-atomically in the user's cache folder (:func:`iterplan_compiler.outputs.user_cache_dir`);
+open-alphabet safety test of :mod:`.open_safety` (E0605) keeps its witness the same way.
+Entries are JSON (never pickles), written atomically in the user's cache folder (:func:`iterplan_compiler.outputs.user_cache_dir`);
 ``ITERPLAN_NO_CACHE=1`` disables the cache, and an unreadable entry is a miss.
 """
 

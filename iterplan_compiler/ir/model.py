@@ -171,8 +171,8 @@ class Model:
         """Build (compose, apply operators, synthesise when asked) the named machine.
 
         An unrealizable ``controller`` composite is an error (E0901, no LTS) by default; with
-        ``unrealizable=Unrealizable.PLANT`` it gives MTSA's composition instead: the plant the game was
-        played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
+        ``unrealizable=Unrealizable.PLANT`` it gives MTSA's composition instead: the plant the
+        game was played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
         W0902.  With ``solve=False`` nothing is synthesised: a synthesis composite (also one
         used as a component) gives the plant its game is played on, under its own name
         (``iterc lts``)."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec
+from iterplan_compiler.ir.graphs import strongly_connected
 
 State = tuple[bool, ...]
 
@@ -209,47 +210,6 @@ def check_strategy(spec: SlugsSpec, strategy: Any) -> list[str]:
 
 
 def _sccs(nodes: Iterable[Any], succ: Callable[[Any], list[Any]]) -> list[set[Any]]:
-    """Tarjan's SCCs (iterative)."""
-    index: dict[Any, int] = {}
-    low: dict[Any, int] = {}
-    on: set[Any] = set()
-    stack: list[Any] = []
-    out: list[set[Any]] = []
-    counter = 0
-    for root in nodes:
-        if root in index:
-            continue
-        work = [(root, iter(succ(root)))]
-        index[root] = low[root] = counter
-        counter += 1
-        stack.append(root)
-        on.add(root)
-        while work:
-            v, it = work[-1]
-            advanced = False
-            for w in it:
-                if w not in index:
-                    index[w] = low[w] = counter
-                    counter += 1
-                    stack.append(w)
-                    on.add(w)
-                    work.append((w, iter(succ(w))))
-                    advanced = True
-                    break
-                if w in on:
-                    low[v] = min(low[v], index[w])
-            if advanced:
-                continue
-            work.pop()
-            if work:
-                low[work[-1][0]] = min(low[work[-1][0]], low[v])
-            if low[v] == index[v]:
-                comp = set()
-                while True:
-                    w = stack.pop()
-                    on.discard(w)
-                    comp.add(w)
-                    if w == v:
-                        break
-                out.append(comp)
-    return out
+    """Tarjan's SCCs (:func:`~iterplan_compiler.ir.graphs.strongly_connected`)."""
+    return [set(c) for c in strongly_connected(nodes, succ)]
+
