@@ -29,10 +29,15 @@ def run_one(path: str, composite: str) -> dict:
     import warnings
 
     warnings.simplefilter("ignore")
+    from iterplan_compiler import limits
     from iterplan_compiler.diagnostics import has_errors
-    from iterplan_compiler.frontend import load_with_sources
+    from iterplan_compiler.pipeline import load_model_with_sources as load_with_sources
     from iterplan_compiler.synthesis.driver import synthesize
 
+    # the translated specs exceed the interactive defaults (GyroLTLVar2_701's G5 has 13
+    # temporal subformulas, over --max-temporal-ops 10): a benchmark measures the engine,
+    # the time-out is the limit
+    limits.set_limits(max_temporal_ops=24, max_states=50_000_000, max_memory_mb=16_000)
     model, diags, _ = load_with_sources(path)
     if model is None or has_errors(diags):
         return {"verdict": "error"}

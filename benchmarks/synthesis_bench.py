@@ -85,7 +85,7 @@ def bench_family(max_n: int, explicit_max: int, min_n: int = 2) -> None:
 
 def bench_conformance(root: Path, limit: float) -> None:
     try:
-        from iterplan_compiler.frontend import load
+        from iterplan_compiler.pipeline import load_model as load
     except ImportError:
         print("(front-end not available: conformance specs skipped)")
         return
@@ -120,7 +120,7 @@ def bench_patrol(root: Path, ns: list[int]) -> None:
     import re
 
     try:
-        from iterplan_compiler.frontend import load
+        from iterplan_compiler.pipeline import load_model as load
     except ImportError:
         print("(front-end not available: Patrol_N skipped)")
         return

@@ -6,7 +6,9 @@ Each sub-command lives in ``iterplan_compiler/commands/<name>.py`` and provides
 * ``add_arguments(parser: argparse.ArgumentParser) -> None``;
 * ``run(args: argparse.Namespace) -> int`` — the exit code.
 
-Command modules are imported lazily so ``iterc run`` does not pay for lark/dd start-up.
+:data:`COMMANDS` is the static command table; a command's module is imported (by an ordinary
+import in its loader) only when that command runs, so ``iterc run`` does not pay for lark/dd
+start-up.
 
 Exit codes (documented in the README): 0 success, 1 the input has errors (diagnostics were
 printed) or a check failed (unrealizable, property violated), 2 bad command-line usage,
@@ -16,30 +18,119 @@ printed) or a check failed (unrealizable, property violated), 2 bad command-line
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.util
 import sys
 import traceback
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Protocol
 
 from iterplan_compiler import __version__, limits
 
-# name -> (module, one-line help).  The help is duplicated here so `iterc --help` need not
-# import every command module.
-COMMANDS: dict[str, str] = {
-    "check": "parse and elaborate a spec; report diagnostics",
-    "lts": "compose a process or composite and print it",
-    "verify": "model-check an FLTL assert on a composite",
-    "synth": "synthesise a controller (GR(1)) and report sizes and times",
-    "compile": "compile a spec into a Python controller module",
-    "dot": "export a process, composite or controller as Graphviz",
-    "solve": "GR(1) realizability/strategy for a slugsin file",
-    "run": "run a generated controller on the simulator or a MAVLink vehicle",
-    "view": "show a finished run (iterc run --out folder) in the mission view, with a time slider",
-    "demo": "compile the bundled Fire Patrol example and fly it in the simulator",
-    "conformance": "run the MTSA conformance corpus and print a report",
-    "experiment": "reproduce the paper's Fig. 3 experiments",
-    "animate": "animate a process or composite: pick actions, undo, save the trace",
+
+class CommandModule(Protocol):
+    """What a module of ``iterplan_compiler/commands/`` provides."""
+
+    HELP: str
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None: ...
+
+    def run(self, args: argparse.Namespace) -> int: ...
+
+
+@dataclass(frozen=True)
+class Command:
+    """One sub-command: its ``--help`` line and how to import its module.
+
+    The loaders are ordinary imports, run only for the command given, so ``iterc run`` does
+    not pay for lark/dd start-up and ``iterc --help`` imports no command module."""
+
+    help: str
+    load: Callable[[], CommandModule]
+
+
+def _check() -> CommandModule:
+    from iterplan_compiler.commands import check
+    return check
+
+
+def _lts() -> CommandModule:
+    from iterplan_compiler.commands import lts
+    return lts
+
+
+def _verify() -> CommandModule:
+    from iterplan_compiler.commands import verify
+    return verify
+
+
+def _synth() -> CommandModule:
+    from iterplan_compiler.commands import synth
+    return synth
+
+
+def _compile() -> CommandModule:
+    from iterplan_compiler.commands import compile as compile_command
+    return compile_command
+
+
+def _dot() -> CommandModule:
+    from iterplan_compiler.commands import dot
+    return dot
+
+
+def _solve() -> CommandModule:
+    from iterplan_compiler.commands import solve
+    return solve
+
+
+def _run_command() -> CommandModule:
+    from iterplan_compiler.commands import run
+    return run
+
+
+def _view() -> CommandModule:
+    from iterplan_compiler.commands import view
+    return view
+
+
+def _demo() -> CommandModule:
+    from iterplan_compiler.commands import demo
+    return demo
+
+
+def _conformance() -> CommandModule:
+    from iterplan_compiler.commands import conformance
+    return conformance
+
+
+def _experiment() -> CommandModule:
+    from iterplan_compiler.commands import experiment
+    return experiment
+
+
+def _animate() -> CommandModule:
+    from iterplan_compiler.commands import animate
+    return animate
+
+
+COMMANDS: dict[str, Command] = {
+    "check": Command("parse and elaborate a spec; report diagnostics", _check),
+    "lts": Command("compose a process or composite and print it", _lts),
+    "verify": Command("model-check an FLTL assert on a composite", _verify),
+    "synth": Command("synthesise a controller (GR(1)) and report sizes and times", _synth),
+    "compile": Command("compile a spec into a Python controller module", _compile),
+    "dot": Command("export a process, composite or controller as Graphviz", _dot),
+    "solve": Command("GR(1) realizability/strategy for a slugsin file", _solve),
+    "run": Command("run a generated controller on the simulator or a MAVLink vehicle",
+                   _run_command),
+    "view": Command("show a finished run (iterc run --out folder) in the mission view, with a "
+                    "time slider", _view),
+    "demo": Command("compile the bundled Fire Patrol example and fly it in the simulator",
+                    _demo),
+    "conformance": Command("run the MTSA conformance corpus and print a report", _conformance),
+    "experiment": Command("reproduce the paper's Fig. 3 experiments", _experiment),
+    "animate": Command("animate a process or composite: pick actions, undo, save the trace",
+                       _animate),
 }
 
 #: commands that compile specs and so take the resource-limit flags (limits.py)
@@ -51,15 +142,6 @@ EXIT_USAGE = 2
 EXIT_INTERNAL = 3
 
 
-def _load(name: str):
-    return importlib.import_module(f"iterplan_compiler.commands.{name}")
-
-
-def _available(name: str) -> bool:
-    """True if the command's module ships in this build (checked without importing it)."""
-    return importlib.util.find_spec(f"iterplan_compiler.commands.{name}") is not None
-
-
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """Build the argument parser; with ``only``, import just that command's module."""
     parser = argparse.ArgumentParser(
@@ -68,10 +150,10 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"iterc {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, help_text in COMMANDS.items():
-        p = sub.add_parser(name, help=help_text, description=help_text)
+    for name, command in COMMANDS.items():
+        p = sub.add_parser(name, help=command.help, description=command.help)
         if only == name:
-            _load(name).add_arguments(p)
+            command.load().add_arguments(p)
             if name in LIMITED_COMMANDS:
                 limits.add_arguments(p)
     return parser
@@ -83,9 +165,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = next((a for a in args_list if not a.startswith("-")), None)
     if command not in COMMANDS:
         command = None
-    elif not _available(command):
-        print(f"iterc: the '{command}' command is not part of this build", file=sys.stderr)
-        return EXIT_USAGE
     parser = build_parser(only=command)
     args = parser.parse_args(args_list)
     if args.command is None:
@@ -106,7 +185,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     try:
-        return int(_load(args.command).run(args))
+        return int(COMMANDS[args.command].load().run(args))
     except KeyboardInterrupt:
         print("iterc: interrupted", file=sys.stderr)
         return 130

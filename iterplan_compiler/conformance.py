@@ -5,19 +5,15 @@ a ``verdicts.tsv`` that says what MTSA's tests expect of each file.  This module
 into one :class:`RowResult` and runs the whole table, each row in its own Python process so that a
 crash, a blow-up or a time-out in one file never takes the report down.
 
-Contract of a row check (:func:`check_row`): it never raises; every outcome is a status
+A row's checks are planned and run by :mod:`iterplan_compiler.conformance_checks`: the verdict
+of its family and every clause of its ``checks`` column, each with its own status; the row's
+status is the worst of them (``pass`` < ``unsupported`` < ``fail`` < ``error`` < ``crash`` <
+``timeout``).  An unknown verdict family or an unrecognised clause is an ``error`` check.
+:func:`check_row` never raises.
 
-* ``pass`` — the verdict (and the checks we implement) match;
-* ``fail`` — a verdict or check disagrees with MTSA's expectation;
-* ``unsupported`` — the front-end rejected a construct with an "unsupported construct"
-  diagnostic (counted separately, as the corpus README asks);
-* ``error`` — the file produced error diagnostics where MTSA compiles it;
-* ``crash`` — an exception escaped the compiler (a bug);
-* ``timeout`` — the row exceeded its time limit (set by the driver).
-
-A *baseline* file (``tests/data/conformance_baseline.tsv``: ``file<TAB>status``) records what
-passed when it was written; the command exits 1 if a row that passed there no longer passes, so
-the corpus acts as a ratchet in CI while unsupported corners are still being filled in.
+A *baseline* file (``tests/data/conformance_baseline.tsv``: ``key<TAB>status``, the key being
+``file::composite`` so rows sharing a file stay apart) records what passed; the command exits 1
+if a row that passed there no longer passes, and rewriting the baseline never drops a pass.
 """
 
 from __future__ import annotations
@@ -26,17 +22,23 @@ import argparse
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import time
 import traceback
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
-STATUSES = ("pass", "fail", "unsupported", "error", "crash", "timeout")
+from iterplan_compiler import conformance_checks as cc
+from iterplan_compiler.conformance_checks import CheckResult, Family, Status
+
+STATUSES = cc.STATUSES
+_PARENS = re.compile(r"\([^)]*\)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,44 +52,51 @@ class Row:
     checks: str
 
     @property
-    def composite_name(self) -> str:
-        """The composite to build: the first word (``B (fallback: ...)`` → ``B``)."""
-        name = self.composite.split()[0] if self.composite.strip() else "C"
-        return name.split("(")[0] or "DEFAULT"
+    def composites(self) -> tuple[str, ...]:
+        """Every composite the column lists: ``TT, BIS, C, Comp`` -> four names,
+        ``B (fallback: ...)`` -> ``B`` (the one MTSA built), ``DEFAULT(all processes)`` ->
+        ``DEFAULT``; an empty cell -> ``C``."""
+        names = [n.strip() for n in _PARENS.sub("", self.composite).split(",")]
+        return tuple(n for n in names if n) or ("C",)
+
+    @property
+    def key(self) -> str:
+        """The row's identity in the baseline: ``file::first composite``."""
+        return f"{self.file}::{self.composites[0]}"
+
+    @property
+    def family(self) -> Family:
+        return cc.family(self.expected)
 
     @property
     def kind(self) -> str:
-        """The verdict family: realizable, unrealizable, compiles, alphabet, recursion,
-        bisimilar, legal, not legal."""
-        e = self.expected
-        if e.startswith("unrealizable"):
-            return "unrealizable"
-        if e.startswith("realizable"):
-            return "realizable"
-        if e.startswith("compiles"):
-            return "compiles"
-        if e.startswith("alphabet"):
-            return "alphabet"
-        if e.startswith("error: recursive"):
-            return "recursion"
-        if e.startswith("n.a.") and "bisimulation" in self.checks:
-            return "bisimilar"
-        if e.startswith("not legal"):
-            return "not legal"
-        if e.startswith("legal"):
-            return "legal"
-        return "other"
+        """The verdict family's name (the report's first column)."""
+        return self.family.value
 
 
 @dataclass(frozen=True, slots=True)
 class RowResult:
-    """The outcome of one row: status, a one-line detail, and the wall time in seconds."""
+    """The outcome of one row: status (the worst of its checks), the checks, wall seconds."""
 
     file: str
+    key: str
     kind: str
     status: str
     detail: str
     seconds: float
+    checks: tuple[CheckResult, ...] = ()
+
+    @staticmethod
+    def from_dict(data: Mapping[str, Any]) -> RowResult:
+        checks = tuple(CheckResult(c["name"], Status(c["status"]), c["detail"])
+                       for c in data.get("checks", ()))
+        return RowResult(data["file"], data["key"], data["kind"], data["status"],
+                         data["detail"], float(data["seconds"]), checks)
+
+    @staticmethod
+    def whole(row: Row, status: Status, detail: str, seconds: float) -> RowResult:
+        """A result decided for the row as a whole (time-out, crash of the worker)."""
+        return RowResult(row.file, row.key, row.kind, status.value, detail, seconds)
 
 
 def read_rows(root: Path) -> list[Row]:
@@ -108,130 +117,41 @@ def read_rows(root: Path) -> list[Row]:
 # One row, in-process
 
 
-def _is_unsupported(diag) -> bool:
-    return "unsupported" in diag.message.lower() or diag.code.startswith("U")
-
-
-def _first_errors(diags, limit: int = 1) -> str:
-    from iterplan_compiler.diagnostics import Severity
-
-    errs = [d for d in diags if d.severity == Severity.ERROR]
-    parts = []
-    for d in errs[:limit]:
-        parts.append(f"{d.span.line}:{d.span.column}: [{d.code}] {d.message}")
-    return "; ".join(parts)
-
-
-def _expected_alphabet(checks: str) -> set[str] | None:
-    start, end = checks.find("["), checks.find("]")
-    if start < 0 or end < start:
-        return None
-    return set(checks[start + 1:end].split())
-
-
 def check_row(root: Path, row: Row) -> RowResult:
     """Check one row in this process; never raises (see the module docstring)."""
     start = time.perf_counter()
     try:
-        status, detail = _check(root, row)
+        results = _check(root, row)
     except Exception as exc:  # a compiler bug: report it, keep the traceback's last frame
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
-        status, detail = "crash", f"{type(exc).__name__}: {exc}{where}"
-    detail = detail.strip().splitlines()[0] if detail.strip() else ""
-    return RowResult(row.file, row.kind, status, detail, time.perf_counter() - start)
+        results = [CheckResult("row", Status.CRASH, f"{type(exc).__name__}: {exc}{where}")]
+    status = cc.worst([r.status for r in results])
+    detail = "; ".join(" ".join(r.line().split()) for r in results)
+    return RowResult(row.file, row.key, row.kind, status.value, detail,
+                     time.perf_counter() - start, tuple(results))
 
 
-def _check(root: Path, row: Row) -> tuple[str, str]:
-    from iterplan_compiler import frontend
-    from iterplan_compiler.diagnostics import has_errors
+def _check(root: Path, row: Row) -> list[CheckResult]:
+    from iterplan_compiler import pipeline
 
-    model, diags = frontend.load(root / row.file)
-    kind = row.kind
-    if kind == "recursion":
-        msgs = " ".join(d.message.lower() for d in diags)
-        if model is not None:
-            _, more = model.build_lts(row.composite_name)
-            msgs += " " + " ".join(d.message.lower() for d in more)
-        if "recursive" in msgs:
-            return "pass", "recursive composition reported"
-        return "fail", "no recursive-composition error"
-    if model is None or has_errors(diags):
-        if any(_is_unsupported(d) for d in diags):
-            return "unsupported", _first_errors([d for d in diags if _is_unsupported(d)])
-        if row.expected.startswith("compiles (errors only printed"):
-            return "pass", "errors printed (MTSA's test never fails)"
-        return "error", _first_errors(diags)
-    name = row.composite_name
-    if kind in ("realizable", "unrealizable"):
-        return _check_synthesis(model, row)
-    if kind == "compiles":
-        return _check_compiles(model, row)
-    if kind == "alphabet":
-        # MTSA's composition of an unrealizable controller composite is the plant `C_#NC#`
-        # (semantics notes §3.7); its alphabet is what the test compares.
-        lts, more = model.build_lts(name, unrealizable="plant")
-    else:
-        lts, more = model.build_lts(name)
-    if lts is None or has_errors(more):
-        if any(_is_unsupported(d) for d in more):
-            return "unsupported", _first_errors([d for d in more if _is_unsupported(d)])
-        return "error", f"building {name}: {_first_errors(more)}"
-    if kind == "alphabet":
-        expected = _expected_alphabet(row.checks) or set()
-        got = set(lts.alphabet)
-        if got == expected:
-            return "pass", f"alphabet {sorted(got)}"
-        return "fail", f"alphabet {sorted(got)}, expected {sorted(expected)}"
-    if kind == "bisimilar":
-        from iterplan_compiler.ir.minimise import bisimilar
-
-        exp, more2 = model.build_lts("ExpectedC")
-        if exp is None:
-            return "error", f"building ExpectedC: {_first_errors(more2)}"
-        ok = bisimilar(lts, exp)
-        return ("pass" if ok else "fail"), (
-            f"{lts.num_states} states vs ExpectedC {exp.num_states}: "
-            + ("bisimilar" if ok else "not bisimilar"))
-    if kind in ("legal", "not legal"):
-        return _check_legality(model, row)
-    return "pass", "compiles"
+    model, diags = pipeline.load_model(root / row.file)
+    problem = cc.diag_status(diags)
+    if model is None or problem is not None:
+        return [_load_failure(row, diags, problem or Status.ERROR)]
+    return cc.run_checks(model, cc.plan(row.expected, row.composites, row.checks))
 
 
-def _check_compiles(model, row: Row) -> tuple[str, str]:
-    from iterplan_compiler.diagnostics import has_errors
-
-    names = [row.composite_name] if row.composite_name in model.names() else []
-    if not names:
-        return "pass", "compiles (no such composite; MTSA falls back)"
-    lts, more = model.build_lts(names[0])
-    if lts is not None and not has_errors(more):
-        return "pass", f"{names[0]}: {lts.num_states} states"
-    if any(_is_unsupported(d) for d in more):
-        return "unsupported", _first_errors([d for d in more if _is_unsupported(d)])
-    # `controller` composites that are unrealizable still "compile" in MTSA (C_#NC#).
-    if any("unrealizable" in d.message.lower() or "no controller" in d.message.lower()
-           for d in more):
-        return "pass", f"{names[0]}: compiles (unrealizable)"
-    return "error", f"building {names[0]}: {_first_errors(more)}"
-
-
-def _check_synthesis(model, row: Row) -> tuple[str, str]:
-    """Verdict plus the row's checks, by :func:`iterplan_compiler.synthesis.conformance.check_row`
-    (``None`` there means the row needs an unsupported feature)."""
-    from iterplan_compiler.synthesis.conformance import check_row as check_synthesis_row
-
-    ok, detail = check_synthesis_row(model, row)
-    if ok is None:
-        return "unsupported", detail
-    return ("pass" if ok else "fail"), detail
-
-
-def _check_legality(model, row: Row) -> tuple[str, str]:
-    """MTSA's LegalityAnalyser verdict for the row's composite (``Model.legality``)."""
-    legal, detail = model.legality(row.composite_name)
-    want = row.kind == "legal"
-    return ("pass" if legal == want else "fail"), detail
+def _load_failure(row: Row, diags: list, status: Status) -> CheckResult:
+    """The file does not load: only a recursion row (E0401 expected) or MTSA's never-failing
+    parser tests can still pass."""
+    found = cc.first_error(diags)
+    if row.family == Family.RECURSION:
+        ok = any(d.code == cc.RECURSION_CODE for d in cc.errors_of(diags))
+        return CheckResult("recursive composition", Status.PASS if ok else Status.FAIL, found)
+    if row.family == Family.NEVER_FAILS and status != Status.UNSUPPORTED:
+        return CheckResult("loads (MTSA only prints errors)", Status.PASS, found)
+    return CheckResult("loads", status, found)
 
 
 # --------------------------------------------------------------------------------------------
@@ -239,23 +159,23 @@ def _check_legality(model, row: Row) -> tuple[str, str]:
 
 
 def _run_isolated(root: Path, row: Row, timeout: float) -> RowResult:
-    cmd = [sys.executable, "-m", "iterplan_compiler.conformance", "--one", str(root), row.file]
+    cmd = [sys.executable, "-m", "iterplan_compiler.conformance", "--one", str(root), row.key]
     start = time.perf_counter()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
                               env={**os.environ, "PYTHONHASHSEED": "0"})
     except subprocess.TimeoutExpired:
-        return RowResult(row.file, row.kind, "timeout", f"> {timeout:g} s", timeout)
+        return RowResult.whole(row, Status.TIMEOUT, f"> {timeout:g} s", timeout)
     elapsed = time.perf_counter() - start
     for line in reversed(proc.stdout.splitlines()):
         if line.startswith("{"):
             try:
                 data = json.loads(line)
-                return RowResult(**data)
+                return RowResult.from_dict(data)
             except (ValueError, TypeError):
                 break
     tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-    return RowResult(row.file, row.kind, "crash", f"exit {proc.returncode}: {tail}", elapsed)
+    return RowResult.whole(row, Status.CRASH, f"exit {proc.returncode}: {tail}", elapsed)
 
 
 def _warm_up(root: Path) -> None:
@@ -273,9 +193,9 @@ def _warm_up(root: Path) -> None:
         except ImportError:
             pass
     try:
-        from iterplan_compiler import frontend
+        from iterplan_compiler import pipeline
 
-        frontend.load(root / "warm-up.lts", text="A = (a -> A).\n")
+        pipeline.load_model(root / "warm-up.lts", text="A = (a -> A).\n")
     except Exception:  # warming up is an optimisation only
         pass
 
@@ -300,7 +220,8 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
     first).
     """
     import multiprocessing as mp
-    from multiprocessing.connection import wait
+    from multiprocessing.connection import Connection, wait
+    from multiprocessing.process import BaseProcess
 
     rows = list(rows)
     if "fork" not in mp.get_all_start_methods():
@@ -311,7 +232,7 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
     results: list[RowResult | None] = [None] * len(rows)
     deadline = None if budget is None else time.monotonic() + budget
     pending = list(range(len(rows)))
-    running: dict[object, tuple[int, object, float]] = {}  # conn -> (index, process, start)
+    running: dict[Connection, tuple[int, BaseProcess, float]] = {}  # conn -> (index, process, start)
 
     def finish(i: int, res: RowResult) -> None:
         results[i] = res
@@ -323,10 +244,10 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
             i = pending.pop(0)
             row = rows[i]
             if deadline is not None and time.monotonic() > deadline:
-                finish(i, RowResult(row.file, row.kind, "timeout", "budget exhausted", 0.0))
+                finish(i, RowResult.whole(row, Status.TIMEOUT, "budget exhausted", 0.0))
                 continue
             recv, send = ctx.Pipe(duplex=False)
-            proc = ctx.Process(target=_child, args=(send, root, row), daemon=True)
+            proc: BaseProcess = ctx.Process(target=_child, args=(send, root, row), daemon=True)
             proc.start()
             send.close()
             running[recv] = (i, proc, time.monotonic())
@@ -336,16 +257,16 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
         next_expiry = min(start + timeout for _, _, start in running.values())
         ready = wait(list(running), timeout=max(0.0, next_expiry - now))
         for conn in ready:
+            assert isinstance(conn, Connection)
             i, proc, start = running.pop(conn)
             row = rows[i]
             try:
                 data = conn.recv()
-                res = RowResult(**data)
+                res = RowResult.from_dict(data)
             except (EOFError, OSError, TypeError):
                 proc.join(5)
-                res = RowResult(row.file, row.kind, "crash",
-                                f"worker died (exit {proc.exitcode})",
-                                time.monotonic() - start)
+                res = RowResult.whole(row, Status.CRASH, f"worker died (exit {proc.exitcode})",
+                                      time.monotonic() - start)
             conn.close()
             proc.join(5)
             finish(i, res)
@@ -357,7 +278,7 @@ def run_corpus(root: Path, rows: Iterable[Row], *, jobs: int, timeout: float,
                 conn.close()
                 del running[conn]
                 row = rows[i]
-                finish(i, RowResult(row.file, row.kind, "timeout", f"> {timeout:g} s", timeout))
+                finish(i, RowResult.whole(row, Status.TIMEOUT, f"> {timeout:g} s", timeout))
     return [r for r in results if r is not None]
 
 
@@ -372,7 +293,7 @@ def _run_spawned(root: Path, rows: list[Row], *, jobs: int, timeout: float,
 
     def work(row: Row) -> RowResult:
         if deadline is not None and time.monotonic() > deadline:
-            return RowResult(row.file, row.kind, "timeout", "budget exhausted", 0.0)
+            return RowResult.whole(row, Status.TIMEOUT, "budget exhausted", 0.0)
         return _run_isolated(root, row, timeout)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
@@ -386,27 +307,48 @@ def _run_spawned(root: Path, rows: list[Row], *, jobs: int, timeout: float,
 
 
 def read_baseline(path: Path) -> dict[str, str]:
-    """``file -> status`` from a baseline TSV (missing file → empty)."""
+    """``key -> status`` from a baseline TSV (missing file -> empty).  A line of the old format
+    (``file<TAB>status``, no ``::``) stands for every row of that file (see
+    :func:`baseline_status`)."""
     if not path.exists():
         return {}
-    out = {}
+    out: dict[str, str] = {}
     for line in path.read_text(encoding="utf-8").splitlines():
         if line and not line.startswith("#"):
-            file, _, status = line.partition("\t")
-            out[file] = status.strip()
+            key, _, status = line.partition("\t")
+            old = out.get(key)
+            # an old-format file listed twice (two rows): it passed only if both did
+            out[key] = status.strip() if old in (None, status.strip()) else "fail"
     return out
 
 
-def write_baseline(path: Path, results: Iterable[RowResult]) -> None:
-    """Write ``file<TAB>status`` lines, sorted by file, for the ratchet."""
-    lines = ["# iterc conformance baseline: rows listed as pass must keep passing"]
-    lines += [f"{r.file}\t{r.status}" for r in sorted(results, key=lambda r: r.file)]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+def baseline_status(baseline: Mapping[str, str], key: str) -> str | None:
+    """A row's status in ``baseline``: by its key, else by its file (old format)."""
+    if key in baseline:
+        return baseline[key]
+    return baseline.get(key.partition("::")[0])
 
 
-def regressions(results: Iterable[RowResult], baseline: dict[str, str]) -> list[RowResult]:
+def write_baseline(path: Path, results: Iterable[RowResult],
+                   keep: Mapping[str, str] | None = None) -> None:
+    """Write ``key<TAB>status`` lines, sorted by key, for the ratchet.  A row that passed in
+    ``keep`` (the previous baseline) stays ``pass``: the ratchet never loses a row, a row
+    that stopped passing shows up as a regression until the code is fixed."""
+    keep = keep or {}
+    lines = ["# iterc conformance baseline (key = file::composite): rows listed as pass must "
+             "keep passing"]
+    for r in sorted(results, key=lambda r: r.key):
+        status = "pass" if baseline_status(keep, r.key) == "pass" else r.status
+        lines.append(f"{r.key}\t{status}")
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def regressions(results: Iterable[RowResult], baseline: Mapping[str, str]) -> list[RowResult]:
     """Rows that passed in the baseline and do not pass now."""
-    return [r for r in results if baseline.get(r.file) == "pass" and r.status != "pass"]
+    return [r for r in results
+            if baseline_status(baseline, r.key) == "pass" and r.status != "pass"]
 
 
 def summary_table(results: list[RowResult]) -> str:
@@ -428,11 +370,13 @@ def summary_table(results: list[RowResult]) -> str:
 
 
 def _main_one(argv: list[str]) -> int:
-    """``python -m iterplan_compiler.conformance --one ROOT FILE``: check one row, print JSON."""
-    root, file = Path(argv[0]), argv[1]
-    rows = [r for r in read_rows(root) if r.file == file]
+    """``python -m iterplan_compiler.conformance --one ROOT KEY``: check one row, print JSON."""
+    root, key = Path(argv[0]), argv[1]
+    rows = [r for r in read_rows(root) if r.key == key]
     if not rows:
-        print(json.dumps(asdict(RowResult(file, "other", "error", "not in verdicts.tsv", 0.0))))
+        res = RowResult(key.partition("::")[0], key, Family.UNKNOWN.value, "error",
+                        "not in verdicts.tsv", 0.0)
+        print(json.dumps(asdict(res)))
         return 0
     print(json.dumps(asdict(check_row(root, rows[0]))))
     return 0

@@ -42,6 +42,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass, replace
+from typing import Any
 
 __all__ = ["Limits", "LimitReached", "add_arguments", "apply", "current", "set_limits",
            "int_too_large", "check_int", "deadline_passed"]
@@ -307,7 +308,7 @@ class _ProgressLine:
 
     def __init__(self, label: str) -> None:
         self.label = label
-        self.bar = None
+        self.bar: Any = None  # a tqdm bar once shown
         self.enabled = _stderr_is_tty()
 
     def tick(self, mem: float) -> None:

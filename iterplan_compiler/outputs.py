@@ -277,3 +277,18 @@ class OutputFolder:
                               f"this run failed: {exc_type.__name__}: {exc}\n")
             shutil.rmtree(partial, ignore_errors=True)
             os.replace(self.stage, partial)
+
+
+def user_cache_dir(name: str) -> Path | None:
+    """``$XDG_CACHE_HOME/iterplan/NAME`` (default ``~/.cache``), created; None when caching is
+    off (``ITERPLAN_NO_CACHE=1``) or the folder cannot be written.  A per-user folder, not the
+    shared temp dir: what is cached there is trusted when read back."""
+    if os.environ.get("ITERPLAN_NO_CACHE"):
+        return None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    folder = Path(base) / "iterplan" / name
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    return folder if os.access(folder, os.W_OK) else None

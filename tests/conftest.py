@@ -9,8 +9,15 @@ counterexample it finds should become an explicit regression test.
 from __future__ import annotations
 
 import os
+import tempfile
 
 from hypothesis import settings
+
+# The compiler's per-user caches (Lark tables, compiled safety LTSs: outputs.user_cache_dir) go
+# to a fresh folder per test session, also for the iterc subprocesses the tests start: a run
+# never reads an entry written by other code, and the user's ~/.cache is left alone.
+if "ITERPLAN_TEST_KEEP_CACHE" not in os.environ:
+    os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="iterplan-test-cache-")
 
 settings.register_profile("default", derandomize=True, deadline=None, print_blob=True)
 settings.register_profile("explore", derandomize=False, deadline=None, max_examples=500)

@@ -9,6 +9,8 @@ Families (n = parameter):
 
 * ``arbiter`` — Piterman, Pnueli, Sa'ar (VMCAI'06) arbiter: n request/grant pairs.
 * ``lift`` — PPS06 lift controller with n floors (one-hot floors, ``up``/``sb`` outputs).
+* ``lift_gr1c`` — the same lift as gr1c's example generator formulates it (no helper
+  outputs; the formulation of the gr1c anchor numbers).
 * ``genbuf`` — Bloem et al. generalized buffer: n senders, 2 receivers, FIFO as environment.
 * ``amba_jcss12`` — AMBA AHB arbiter, the original Bloem et al. (DATE'07 / JCSS'12) encoding
   with auxiliary monitors ``stateA1``, ``stateG2``, ``stateG3`` and ``stateG10_i``.
@@ -113,6 +115,32 @@ def lift(n: int) -> str:
     for i in range(n):
         s.sys_live(implies(b[i], f[i]))
     s.sys_live(f[0] | sb)
+    return s.text()
+
+
+def lift_gr1c(n: int) -> str:
+    """The PPS06 lift as gr1c's example generator states it (``gen_liftspec.py``; re-encoded
+    here from its formulas, one slugsin line per ``[]`` clause).  Env: button ``b_i`` clears
+    once the lift is at floor ``i`` and stays pressed otherwise (no environment justice).  Sys:
+    floors ``f_i`` pairwise exclusive (a constraint on the *current* state, one line), start at
+    floor 0, move at most one floor per step, move up only while some button is pressed;
+    GF (f_0 ∨ some button) and GF (b_i → f_i).  Unlike :func:`lift` there are no helper
+    outputs (``up``, ``sb``) and no "some floor" constraint."""
+    s = SpecBuilder(f"PPS06 lift (gr1c's formulation), n={n}")
+    b = [s.input(f"b{i}") for i in range(n)]
+    f = [s.output(f"f{i}") for i in range(n)]
+    s.env_init(AND(~x for x in b))
+    for i in range(n):
+        s.env_trans(implies(b[i] & f[i], ~b[i].p) & implies(b[i] & ~f[i], b[i].p), split=False)
+    s.sys_init(f[0] & AND(~x for x in f[1:]))
+    any_b = OR(b)
+    s.sys_trans(implies(OR(f[i] & f[i + 1].p for i in range(n - 1)), any_b), split=False)
+    s.sys_trans(AND(~(f[i] & f[k]) for i in range(n) for k in range(i + 1, n)), split=False)
+    for i in range(n):
+        s.sys_trans(implies(f[i], OR(f[k].p for k in (i - 1, i, i + 1) if 0 <= k < n)))
+    s.sys_live(f[0] | any_b)
+    for i in range(n):
+        s.sys_live(implies(b[i], f[i]))
     return s.text()
 
 
@@ -376,6 +404,7 @@ def amba_fm15(n: int) -> str:
 FAMILIES: dict[str, Callable[[int], str]] = {
     "arbiter": arbiter,
     "lift": lift,
+    "lift_gr1c": lift_gr1c,
     "genbuf": genbuf,
     "amba_jcss12": amba_jcss12,
     "amba_fm15": amba_fm15,
@@ -388,6 +417,7 @@ FAMILIES: dict[str, Callable[[int], str]] = {
 VERDICTS: dict[str, bool] = {
     "arbiter": True,
     "lift": True,
+    "lift_gr1c": True,
     "genbuf": True,
     "amba_jcss12": True,
     "amba_fm15": True,

@@ -34,6 +34,7 @@ from generators import FAMILIES, VERDICTS  # noqa: E402
 SCHEDULES: dict[str, list[int]] = {
     "arbiter": [2, 5, 10, 15, 20, 25, 30, 35, 40, 50, 60, 70, 80, 100, 120],
     "lift": [2, 5, 10, 15, 20, 25, 30, 35, 40, 50, 60, 70, 80, 100, 120],
+    "lift_gr1c": [2, 5, 10, 20, 30, 40, 50, 60, 70, 80, 100],
     "genbuf": [2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 32, 35, 38, 41, 44, 50, 60, 70, 80, 100],
     "amba_jcss12": [2, 3, 4, 5, 6, 7, 8, 9, 10],
     "amba_fm15": [2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 18, 20, 25, 30, 35, 40],
@@ -44,6 +45,7 @@ SCHEDULES: dict[str, list[int]] = {
 QUICK: dict[str, list[int]] = {
     "arbiter": [2, 5, 10],
     "lift": [2, 5, 10],
+    "lift_gr1c": [2, 5, 10],
     "genbuf": [2, 5, 8],
     "amba_jcss12": [2, 3],
     "amba_fm15": [2, 3, 4],
@@ -64,7 +66,11 @@ ANCHORS: dict[tuple[str, int], dict[str, float]] = {
     ("genbuf", 44): {"omega": 12.58, "gr1c": 39.49},
     ("genbuf", 29): {"omega": 4.496, "slugs": 15.27, "gr1c": 9.57},
     ("arbiter", 40): {"gr1c": 1.92, "slugs": 5.61, "omega": 16.646},
-    ("lift", 40): {"gr1c": 0.92, "slugs": 10.49, "omega": 4.166},
+    # gr1c's lift generator (the anchors' instances); n=50/60 gr1c numbers from issue #12
+    ("lift_gr1c", 20): {"gr1c": 0.1, "slugs": 0.92, "omega": 0.497},
+    ("lift_gr1c", 40): {"gr1c": 0.92, "slugs": 10.49, "omega": 4.166},
+    ("lift_gr1c", 50): {"gr1c": 1.6},
+    ("lift_gr1c", 60): {"gr1c": 3.6},
 }
 ANCHOR_FAMILY_NAMES = {"amba_fm15": "synt15", "amba_jcss12": "jcss12"}
 

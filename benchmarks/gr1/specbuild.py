@@ -143,11 +143,11 @@ class SpecBuilder:
     def sys_init(self, f: F) -> None:
         self._add("SYS_INIT", f)
 
-    def env_trans(self, f: F) -> None:
-        self._add("ENV_TRANS", f)
+    def env_trans(self, f: F, split: bool = True) -> None:
+        self._add("ENV_TRANS", f, split)
 
-    def sys_trans(self, f: F) -> None:
-        self._add("SYS_TRANS", f)
+    def sys_trans(self, f: F, split: bool = True) -> None:
+        self._add("SYS_TRANS", f, split)
 
     def env_live(self, f: F) -> None:
         self._add("ENV_LIVENESS", f, split=False)

@@ -14,8 +14,6 @@ import subprocess
 from collections.abc import Iterable
 from pathlib import Path
 
-import pydot
-
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU
 
 #: Output formats :func:`render` understands, by file suffix.
@@ -59,6 +57,10 @@ def to_dot(
     the LTS's name) labels the graph.  Nodes are named by state number; ``state_names``, when the
     LTS has them, become node labels.
     """
+    # pydot (and pyparsing under it) is imported here, not at module level: 20-40 ms that
+    # `iterc compile --emit py`, the common case, does not need
+    import pydot
+
     ctrl = frozenset(controllable) if controllable is not None else frozenset()
     graph = pydot.Dot(
         _q(lts.name or "LTS"),
@@ -80,7 +82,7 @@ def to_dot(
             attrs["shape"] = "doublecircle"
         if s == lts.initial:
             attrs["style"] = "bold"
-        graph.add_node(pydot.Node(str(s), **attrs))
+        graph.add_node(pydot.Node(str(s), **attrs))  # type: ignore[arg-type]  # pydot stubs
     if lts.has_error:
         graph.add_node(pydot.Node(
             _ERROR_NODE, shape="box", style="filled", fillcolor="#f4cccc", color="red",
@@ -104,7 +106,7 @@ def to_dot(
         if dashed:
             attrs["style"] = "dashed"
         target = _ERROR_NODE if t == ERROR else str(t)
-        graph.add_edge(pydot.Edge(str(s), target, **attrs))
+        graph.add_edge(pydot.Edge(str(s), target, **attrs))  # type: ignore[arg-type]  # pydot stubs
     return graph.to_string()
 
 

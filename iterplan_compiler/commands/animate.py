@@ -22,12 +22,14 @@ import difflib
 import sys
 from collections.abc import Iterable
 
-from iterplan_compiler.diagnostics import Span, error, has_errors, render
+from iterplan_compiler import pipeline
+from iterplan_compiler.diagnostics import Span, error, render
+from iterplan_compiler.ir.animator import Animator
 
 HELP = "animate a process or composite: pick actions, undo, save the trace"
 
 E_BAD_COMMAND = "E1311"
-E_NO_TARGET = "E504"  # as `iterc lts`
+E_NO_TARGET = "E0104"  # as `iterc lts`
 E_NO_SPEC = "E1312"
 
 COMMANDS_HELP = ("commands: NUMBER or ACTION fires it, u/undo, s/save PATH, h/help, q/quit")
@@ -104,14 +106,13 @@ def _controllable(model, name: str, spec_name: str | None, spec_path: str):
     return frozenset(), "", []
 
 
-def _build(args):
-    """Load SPEC and build NAME → (animator, sources) or (None, exit code)."""
-    from iterplan_compiler.frontend import load_with_sources
-    from iterplan_compiler.ir.animator import Animator
-
-    model, diags, sources = load_with_sources(args.spec)
-    if model is None or has_errors(diags):
-        print(render([d for d in diags if d.is_error], sources), file=sys.stderr)
+def _build(args: argparse.Namespace) -> tuple[Animator | None, int]:
+    """Load SPEC and build NAME → (animator, 0) or (None, exit code)."""
+    elab = pipeline.load(args.spec)
+    model = elab.model
+    if not elab.ok or model is None:
+        print(render([d for d in elab.diagnostics if d.is_error], elab.sources),
+              file=sys.stderr)
         return None, 1
     whole = Span(args.spec, 0, 0)
     name = args.name or model.default_name()
@@ -119,19 +120,17 @@ def _build(args):
         print(render([error(E_NO_TARGET, "the spec defines no process or composite to "
                             "animate", whole)]), file=sys.stderr)
         return None, 1
-    if name not in model.names() and name != "DEFAULT":
-        close = difflib.get_close_matches(name, model.names(), n=1)
-        hint = (f"did you mean '{close[0]}'?" if close
-                else "defined: " + (", ".join(model.names()) or "none"))
-        print(render([error(E_NO_TARGET, f"no process or composite named '{name}'; {hint}",
-                            whole)]), file=sys.stderr)
+    unknown = pipeline.unknown_name(elab, name)
+    if unknown is not None:
+        print(render([unknown]), file=sys.stderr)
         return None, 1
     controllable, origin, cdiags = _controllable(model, name, args.controller_spec, args.spec)
     if cdiags:
         print(render(cdiags), file=sys.stderr)
         return None, 1
-    lts, ds = model.build_lts(name)
-    errs = [d for d in ds if d.is_error]
+    built = pipeline.build(elab, name, pipeline.BuildMode.SOLVE)
+    lts = built.lts
+    errs = [d for d in built.diagnostics if d.is_error]
     if errs or lts is None:
         print(render(errs, model.sources), file=sys.stderr)
         return None, 1
@@ -198,7 +197,7 @@ def interactive(animator) -> int:
     from iterplan_compiler.ir.animator import AnimationError
 
     session = Session(animator)
-    prompt = PromptSession(history=InMemoryHistory())
+    prompt: PromptSession[str] = PromptSession(history=InMemoryHistory())
     print(animator.screen())
     print(COMMANDS_HELP)
     while True:

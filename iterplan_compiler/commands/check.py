@@ -18,8 +18,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
+from iterplan_compiler import pipeline
+from iterplan_compiler.commands.ltsa_checks import run_checks
+from iterplan_compiler.commands.semantic_checks import include_set_dependencies, labels_against_plants
 from iterplan_compiler.diagnostics import has_errors, render
+from iterplan_compiler.frontend.parse import parse_text
+from iterplan_compiler.frontend.printer import print_spec
 
 HELP = "parse and elaborate a spec; report diagnostics"
 
@@ -45,15 +51,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from iterplan_compiler.frontend import load_with_sources
-
     if getattr(args, "print_fsp", False):
         return _print(args.spec)
-    model, diags, sources = load_with_sources(args.spec)
+    elab = pipeline.load(args.spec)
+    model, diags, sources = elab.model, list(elab.diagnostics), elab.sources
+    if model is not None and elab.ok:
+        diags += labels_against_plants(model) + include_set_dependencies(model)
     if model is not None and args.build:
         for name in model.own_names():
-            _, ds = model.build_lts(name)
-            diags += [d for d in ds if d not in diags]
+            built = pipeline.build(elab, name, pipeline.BuildMode.SOLVE)
+            diags += [d for d in built.diagnostics if d not in diags]
     shown = [d for d in diags if d.is_error or not args.quiet]
     if shown:
         print(render(shown, model.sources if model is not None else sources),
@@ -69,8 +76,6 @@ def run(args: argparse.Namespace) -> int:
         if not legal:
             return 1
     if getattr(args, "safety", None) or getattr(args, "progress", None):
-        from iterplan_compiler.commands.ltsa_checks import run_checks
-
         if run_checks(args, model):
             return 1
     print(f"{args.spec}: ok ({len(model.processes)} processes, {len(model.composites)} "
@@ -80,11 +85,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print(path: str) -> int:
-    from pathlib import Path
-
-    from iterplan_compiler.frontend.parse import parse_text
-    from iterplan_compiler.frontend.printer import print_spec
-
     try:
         text = Path(path).read_text(encoding="utf-8", errors="replace")
     except OSError as e:

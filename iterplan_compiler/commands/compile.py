@@ -11,15 +11,17 @@ import argparse
 import sys
 from pathlib import Path
 
+from iterplan_compiler import pipeline
+from iterplan_compiler.backends.output import EMIT_KINDS, EmitKind
 from iterplan_compiler.diagnostics import render
+from iterplan_compiler.outputs import OutputError, atomic_write_text, refuse_overwrite_input
+from iterplan_compiler.synthesis.driver import SOLVERS, Solver
 
 HELP = "compile a spec into a Python controller module"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    from iterplan_compiler.backends.driver import EMIT_KINDS
-
     parser.add_argument("spec", metavar="SPEC", help="the .lts specification file")
     parser.add_argument("-c", "--composite", metavar="NAME",
                         help="controller composite to compile (default: the last one in SPEC)")
@@ -28,7 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--emit", choices=EMIT_KINDS, default=None,
                         help="what to write: py (default), dot, fsp or json; "
                              "inferred from the -o suffix when omitted")
-    parser.add_argument("--solver", choices=("symbolic", "explicit"), default="symbolic",
+    parser.add_argument("--solver", choices=SOLVERS, default=Solver.SYMBOLIC.value,
                         help="GR(1) solver (default: symbolic)")
 
 
@@ -38,9 +40,6 @@ _SUFFIX_KIND = {".py": "py", ".dot": "dot", ".gv": "dot", ".lts": "fsp", ".fsp":
 
 def run(args: argparse.Namespace) -> int:
     """Compile; print diagnostics to stderr; return 0, 1 (errors/unrealizable) or 2 (usage)."""
-    from iterplan_compiler.backends.driver import compile_spec
-    from iterplan_compiler.outputs import OutputError, atomic_write_text, refuse_overwrite_input
-
     kind = args.emit
     if kind is None:
         kind = _SUFFIX_KIND.get(Path(args.output).suffix.lower(), "py") if args.output else "py"
@@ -54,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"iterc compile: cannot write {args.output}: no such directory "
               f"'{Path(args.output).parent}'", file=sys.stderr)
         return 1
-    out = compile_spec(args.spec, composite=args.composite, emit_kind=kind, solver=args.solver)
+    out = pipeline.compile_spec(args.spec, composite=args.composite, emit_kind=EmitKind(kind),
+                                solver=Solver(args.solver))
     if out.diagnostics:
         print(render(out.diagnostics, out.sources), file=sys.stderr)
     if out.text is None:

@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--write-baseline", type=Path, default=None,
                         help="write the statuses of this run as a new baseline")
     parser.add_argument("-v", "--verbose", action="store_true",
-                        help="print every row, not only those that do not pass")
+                        help="also print the detail of checks that pass")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,18 +41,21 @@ def run(args: argparse.Namespace) -> int:
     rows = [r for r in conf.read_rows(root) if args.filter in r.file]
     baseline = conf.read_baseline(args.baseline) if args.baseline is not None else {}
     # Rows that passed before run first, so a time budget never turns them into regressions.
-    rows.sort(key=lambda r: baseline.get(r.file) != "pass")
+    rows.sort(key=lambda r: conf.baseline_status(baseline, r.key) != "pass")
     done = 0
     start = time.perf_counter()
 
     def show(res: conf.RowResult) -> None:
+        """Every row with every check and its status; details of the checks that do not
+        pass (of all checks with -v)."""
         nonlocal done
         done += 1
-        if args.verbose or res.status != "pass":
-            print(f"[{done:>3}/{len(rows)}] {res.status:<11} {res.file} "
-                  f"({res.seconds:.1f} s) {res.detail}", flush=True)
-        elif done % 25 == 0:
-            print(f"[{done:>3}/{len(rows)}] ...", flush=True)
+        names = "; ".join(f"{c.name}: {c.status.value}" for c in res.checks) or res.detail
+        print(f"[{done:>3}/{len(rows)}] {res.status:<11} {res.key} ({res.seconds:.1f} s) "
+              f"{names}", flush=True)
+        for check in res.checks:
+            if check.detail and (args.verbose or check.status.value != "pass"):
+                print(f"      {check.status.value:<11} {check.name}: {check.detail}", flush=True)
 
     results = conf.run_corpus(root, rows, jobs=args.jobs, timeout=args.timeout,
                               budget=args.budget, on_result=show)
@@ -61,14 +64,16 @@ def run(args: argparse.Namespace) -> int:
           f"{time.perf_counter() - start:.1f} s wall")
     print(conf.summary_table(results))
     if args.write_baseline is not None:
-        conf.write_baseline(args.write_baseline, results)
+        # never drop a pass: the previous baseline (the file itself, or --baseline) is kept
+        keep = {**conf.read_baseline(args.write_baseline), **baseline}
+        conf.write_baseline(args.write_baseline, results, keep=keep)
         print(f"baseline written to {args.write_baseline}")
     if args.baseline is not None:
         lost = conf.regressions(results, baseline)
         if lost:
             print(f"\n{len(lost)} row(s) passed in {args.baseline} and no longer pass:")
             for r in lost:
-                print(f"  {r.file}: {r.status}: {r.detail}")
+                print(f"  {r.key}: {r.status}: {r.detail}")
             return 1
         print(f"no regressions against {args.baseline}")
     return 0

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
 
     _say(f"[2/3] flying it on the built-in simulator (sorter: {args.sorter})")
     try:
-        result, grid, view = _fly(module, ex.map, args)
+        result, grid, view = _fly(module, ex.map or "", args)
     except StageError as exc:
         print(f"iterc demo: stopped: {exc}", file=sys.stderr)
         return 1
@@ -80,11 +80,8 @@ def _fly(module: Path, map_name: str, args):
     from iterplan_compiler.experiments.flight import fly
     from iterplan_compiler.experiments.missions import LogEvent
     from iterplan_compiler.experiments.pipeline import StageError
+    from iterplan_compiler.runtime.grid import MapError, load_map
 
-    try:
-        from iterplan_compiler.runtime.grid import MapError, load_map
-    except ImportError as exc:
-        raise StageError("runtime", f"maps are not available in this build ({exc})") from None
     map_path = examples_dir() / map_name
     try:
         grid = load_map(map_path)

@@ -12,7 +12,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from iterplan_compiler import pipeline
+from iterplan_compiler.backends.graphviz import RENDER_FORMATS, GraphvizError, to_dot
+from iterplan_compiler.backends.graphviz import render as render_drawing
 from iterplan_compiler.diagnostics import render
+from iterplan_compiler.outputs import OutputError, refuse_overwrite_input
+from iterplan_compiler.synthesis.driver import SOLVERS, Solver
 
 HELP = "export a process, composite or controller as Graphviz"
 
@@ -33,17 +38,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="draw the synthesised controller of a controller composite")
     parser.add_argument("--plain", action="store_true",
                         help="draw every transition solid (ignore controllability)")
-    parser.add_argument("--solver", choices=("symbolic", "explicit"), default="symbolic",
+    parser.add_argument("--solver", choices=SOLVERS, default=Solver.SYMBOLIC.value,
                         help="GR(1) solver used with --controller (default: symbolic)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Draw; print diagnostics to stderr; return 0, 1 (errors) or 2 (usage)."""
-    from iterplan_compiler.backends.driver import build_named
-    from iterplan_compiler.backends.graphviz import RENDER_FORMATS, GraphvizError, to_dot
-    from iterplan_compiler.backends.graphviz import render as draw
-    from iterplan_compiler.outputs import OutputError, refuse_overwrite_input
-
     if args.output:
         suffix = Path(args.output).suffix.lower()
         if suffix not in (".dot", ".gv", *RENDER_FORMATS):
@@ -59,9 +59,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"iterc dot: cannot write {args.output}: no such directory "
                   f"'{Path(args.output).parent}'", file=sys.stderr)
             return 1
-    lts, controllable, diags, sources = build_named(args.spec, args.name,
-                                                    controller=args.controller,
-                                                    solver=args.solver)
+    drawing = pipeline.draw(args.spec, args.name, controller=args.controller,
+                            solver=Solver(args.solver))
+    lts, controllable, diags, sources = (drawing.lts, drawing.controllable, drawing.diagnostics,
+                                         drawing.sources)
     if diags:
         print(render(diags, sources), file=sys.stderr)
     if lts is None:
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
               "(write .dot instead, or draw a smaller process)", file=sys.stderr)
     try:
         refuse_overwrite_input(args.output, list(sources))  # included files are known now
-        draw(text, args.output)
+        render_drawing(text, args.output)
     except OutputError as exc:
         print(f"iterc dot: {exc.message}", file=sys.stderr)
         return 1

@@ -35,7 +35,7 @@ from iterplan_compiler.ir.lts import ERROR, LTS
 E_DEADLOCK = "E1301"
 E_ERROR = "E1302"
 E_PROGRESS = "E1303"
-E_NO_TARGET = "E504"  # as `iterc lts`/`iterc dot`: the same mistake gets the same code
+E_NO_TARGET = "E0104"  # as `iterc lts`/`iterc dot`: the same mistake gets the same code
 
 
 def decl_span(model, name: str) -> Span:
@@ -173,7 +173,7 @@ def safety(model, name: str, spec: str) -> tuple[int, list[Diagnostic]]:
         culprit = violated_property(model, name, lts, result.error)
         where = culprit or name
         print(block(f"Trace to property violation in {where}:", result.error))
-        related = ()
+        related: tuple[Related, ...] = ()
         if culprit is not None and decl_span(model, culprit).line > 0:
             related = (Related(decl_span(model, culprit), f"{culprit} is declared here"),)
         diags.append(error(E_ERROR, f"{name} can reach ERROR; Trace to property violation in "
@@ -231,7 +231,7 @@ def cycle_in(lts: LTS, states: frozenset[int], entry: int) -> tuple[str, ...]:
 
     out = lts.out_edges()
     parent: dict[int, tuple[int, str]] = {}
-    queue = deque()
+    queue: deque[int] = deque()
     for a, t in out[entry]:
         if t in states and t not in parent:
             parent[t] = (entry, a)

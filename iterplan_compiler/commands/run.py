@@ -116,58 +116,35 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.runtime.grid import MapError, load_map
     from iterplan_compiler.runtime.parm import ParmError, read_parm
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
-    from iterplan_compiler.runtime.runfiles import check_out, parse_until, until_hook, write_outputs
+    from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs
     from iterplan_compiler.runtime.sorter import SorterKind
     from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
 
-    def err(msg: str) -> int:
-        print(f"iterc run: error: {msg}", file=sys.stderr)
-        return 1
-
-    def usage(msg: str) -> int:
-        print(f"iterc run: {msg}", file=sys.stderr)
-        return 2
-
-    until = None
-    if args.until is not None:
-        until = parse_until(args.until)
-        if until is None:
-            return usage(f"--until expects LABEL or LABEL:K (K >= 1), not {args.until!r}")
-    passes = args.passes if args.passes is not None else (0 if until else 1)
-    if passes < 0:
-        return usage("--passes must be >= 0")
-    wind = (0.0, 0.0)
-    if args.wind:
-        try:
-            wind = tuple(float(v) for v in args.wind.split(","))  # type: ignore[assignment]
-            if len(wind) != 2 or not all(math.isfinite(w) for w in wind):
-                raise ValueError
-        except ValueError:
-            return usage("--wind expects E,N (m/s)")
-    if args.vehicle == "mavlink" and (args.param or args.wind):
-        return usage("--param and --wind configure the simulator; set a real vehicle's "
-                     "parameters with your ground station")
+    options = _options(args)
+    if isinstance(options, str):
+        return _usage(options)
+    until, passes, wind = options
     try:
         table = load_controller(args.controller)
     except ValueError as exc:
-        return err(str(exc))
+        return _err(str(exc))
     try:
         grid = load_map(args.map)
     except MapError as exc:
         msg = str(exc)
-        return err(msg if msg.startswith(str(args.map)) else f"{args.map}: {msg}")
+        return _err(msg if msg.startswith(str(args.map)) else f"{args.map}: {msg}")
     if until is not None:
         labels = {canon(a) for a in table.controllable | table.uncontrollable}
         if until[0] not in labels:
-            return usage(f"--until {until[0]}: the controller has no event of that name")
+            return _usage(f"--until {until[0]}: the controller has no event of that name")
     try:
         params = read_parm(args.param)
     except ParmError as exc:
-        return err(str(exc))
+        return _err(str(exc))
     out = Path(args.out)
     problem = check_out(out, [Path(args.controller), Path(args.map), *map(Path, args.param)])
     if problem:
-        return err(problem)
+        return _err(problem)
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     # -- live view (issue 16) ---------------------------------------------------------------
     from iterplan_compiler.view import cli as view_cli
@@ -175,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         view = view_cli.start(args, grid, title=Path(args.controller).stem)
     except ViewError as exc:
-        return err(str(exc))
+        return _err(str(exc))
     result = None
     # ----------------------------------------------------------------------------------------
 
@@ -184,16 +161,7 @@ def run(args: argparse.Namespace) -> int:
     vehicle: Any = None
     with sigterm_as_interrupt():
         try:
-            if args.vehicle == "sim":
-                vehicle = _sim_vehicle(args, grid, params, wind, altitude)
-                mode = args.planner or ("carrot" if params else "course")  # calibrated: carrot
-            else:
-                from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
-                link = LinkConfig(ready_timeout=args.ready_timeout, airspeed=args.airspeed,
-                                  loiter_radius=args.loiter_radius)
-                vehicle = MavlinkVehicle.connect(args.connect, grid.frame, link,
-                                                 progress=progress)
-                mode = args.planner or "carrot"
+            vehicle, mode = _vehicle(args, grid, params, wind, altitude, progress)
             cfg = RunConfig(sorter=SorterKind(args.sorter),
                             headings=ArrivalHeadings(args.headings),
                             heading_choice=HeadingChoice(args.heading_choice),
@@ -213,15 +181,72 @@ def run(args: argparse.Namespace) -> int:
                             realtime=view_cli.realtime(args))
             result = Executor(table, grid, vehicle, config=cfg).run()
         except KeyboardInterrupt:
-            return err("interrupted before the mission started; nothing was commanded")
+            return _err("interrupted before the mission started; nothing was commanded")
         except (VehicleError, BindingError) as exc:
-            return err(str(exc))
+            return _err(str(exc))
         finally:
             if vehicle is not None:
                 vehicle.close()
             if view is not None and result is None:    # live view (issue 16): no mission
                 view.close()
         write_outputs(result, out, vehicle, plot=not args.no_plot)
+    _print_summary(result, out)
+    view_cli.finish(view, args, interrupted=result.reason == "interrupted")  # issue 16
+    return 0 if result.ok else 1
+
+
+def _err(msg: str) -> int:
+    print(f"iterc run: error: {msg}", file=sys.stderr)
+    return 1
+
+
+def _usage(msg: str) -> int:
+    print(f"iterc run: {msg}", file=sys.stderr)
+    return 2
+
+
+def _options(args: argparse.Namespace
+             ) -> tuple[tuple[str, int] | None, int, tuple[float, float]] | str:
+    """``(until, passes, wind)`` from the flags, or the usage error."""
+    from iterplan_compiler.runtime.runfiles import parse_until
+
+    until = None
+    if args.until is not None:
+        until = parse_until(args.until)
+        if until is None:
+            return f"--until expects LABEL or LABEL:K (K >= 1), not {args.until!r}"
+    passes = args.passes if args.passes is not None else (0 if until else 1)
+    if passes < 0:
+        return "--passes must be >= 0"
+    wind = (0.0, 0.0)
+    if args.wind:
+        try:
+            values = tuple(float(v) for v in args.wind.split(","))
+            if len(values) != 2 or not all(math.isfinite(w) for w in values):
+                raise ValueError
+            wind = (values[0], values[1])
+        except ValueError:
+            return "--wind expects E,N (m/s)"
+    if args.vehicle == "mavlink" and (args.param or args.wind):
+        return ("--param and --wind configure the simulator; set a real vehicle's "
+                "parameters with your ground station")
+    return until, passes, wind
+
+
+def _vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
+             wind: tuple[float, float], altitude: float, progress: Any) -> tuple[Any, str]:
+    """The vehicle to fly and the planner mode to fly it with."""
+    if args.vehicle == "sim":
+        vehicle = _sim_vehicle(args, grid, params, wind, altitude)
+        return vehicle, args.planner or ("carrot" if params else "course")  # calibrated
+    from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
+    link = LinkConfig(ready_timeout=args.ready_timeout, airspeed=args.airspeed,
+                      loiter_radius=args.loiter_radius)
+    vehicle = MavlinkVehicle.connect(args.connect, grid.frame, link, progress=progress)
+    return vehicle, args.planner or "carrot"
+
+
+def _print_summary(result: Any, out: Path) -> None:
     s = result.summary
     print(f"{'mission completed' if result.ok else 'mission ended early: ' + result.reason}")
     print(f"  duration {s['duration_s']:.1f} s at {s['speed_mps']:.1f} m/s, distance "
@@ -230,8 +255,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"  visited {s['arrivals']} cells, {s['photos']} photos, {s['steps']} controller steps, "
           f"compute {s['compute_s']:.3f} s; outputs in {out}")
     print(f"  safe state: {s['safe_state']}", flush=True)
-    view_cli.finish(view, args, interrupted=result.reason == "interrupted")  # issue 16
-    return 0 if result.ok else 1
 
 
 def _sim_vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],

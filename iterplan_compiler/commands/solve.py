@@ -19,12 +19,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="input format (default: by extension, .structuredslugs or slugsin)")
     parser.add_argument("--realizability-only", action="store_true",
                         help="decide realizability only: keep no iterates, build no strategy")
-    parser.add_argument("--order", choices=("interleaved", "blocked"), default="interleaved",
+    parser.add_argument("--order", choices=("interleaved", "blocked", "spec"), default="interleaved",
                         help="initial BDD variable order (default: x next to x')")
     parser.add_argument("--group-pairs", action="store_true",
                         help="reorder each variable together with its primed copy")
     parser.add_argument("--no-reorder", action="store_true",
                         help="switch CUDD dynamic reordering off")
+    parser.add_argument("--no-sift-after-build", action="store_true",
+                        help="no explicit sifting pass between building the relations and "
+                        "the fixpoint (dynamic reordering only)")
     parser.add_argument("--max-growth", type=float, default=None,
                         help="CUDD sifting max growth (default: dd's 1.2)")
     parser.add_argument("--monolithic", action="store_true",
@@ -38,8 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="classic Z passes (no per-goal Z update / early fixpoint)")
     parser.add_argument("--no-early-unrealizable", action="store_true",
                         help="do not stop as soon as the initial states are lost")
-    parser.add_argument("--engine", choices=("native", "shared"), default="native",
-                        help="fixpoint implementation (shared = synthesis.fixpoint)")
+    parser.add_argument("--chained", action="store_true",
+                        help="Gauss-Seidel μY (realizability-only runs; see synthesis/fixpoint.py)")
     parser.add_argument("--json", action="store_true", help="print statistics as JSON")
 
 
@@ -68,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
         order=args.order,
         group_pairs=args.group_pairs,
         reordering=not args.no_reorder,
+        sift_after_build=not args.no_sift_after_build,
         max_growth=args.max_growth,
         partition=not args.monolithic,
         cluster_nodes=args.cluster_nodes,
@@ -76,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         feedback=not args.no_feedback,
         early_unrealizable=not args.no_early_unrealizable,
         recycle=args.recycle,
-        engine=args.engine,
+        chained=args.chained,
     )
     res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,
                        solver_options=sopt)

@@ -9,6 +9,14 @@ from __future__ import annotations
 import argparse
 import sys
 
+from iterplan_compiler import pipeline
+from iterplan_compiler.diagnostics import Diagnostic, render
+from iterplan_compiler.synthesis.driver import (
+    Solver,
+    SynthesisResult,
+    VariableOrder,
+)
+
 HELP = "synthesise a controller for a controller composite and report"
 
 
@@ -17,27 +25,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("spec", metavar="SPEC", help="the .lts specification file")
     parser.add_argument("composite", metavar="COMPOSITE", nargs="?",
                         help="the controller composite (default: the last one in SPEC)")
-    parser.add_argument("--solver", choices=("symbolic", "explicit"), default="symbolic",
+    parser.add_argument("--solver", choices=[s.value for s in Solver],
+                        default=Solver.SYMBOLIC.value,
                         help="symbolic BDD solver (default) or MTSA's explicit rank solver")
     parser.add_argument("--explain", action="store_true",
-                        help="for an unrealizable spec, print losing states and a "
-                             "counter-strategy trace")
+                        help="for an unrealizable spec, print the environment's winning play "
+                             "(actions and fluent values: the step that breaks a safety "
+                             "property, or the loop that keeps a guarantee false)")
     parser.add_argument("--order",
-                        choices=("clustered", "action_first", "action_last", "blocked"),
-                        default="clustered", help="BDD variable order (symbolic solver)")
-
-
-#: composite keywords that ask for a controller (``checkCompatibility`` only checks the spec)
-_CONTROLLER_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector"})
-
-
-def _pick_composite(model) -> str | None:
-    """The last composite of SPEC that asks for synthesis (by its keywords; cheap: nothing
-    is built)."""
-    for name in reversed(model.composites):
-        if model.composite_keywords.get(name, frozenset()) & _CONTROLLER_KEYWORDS:
-            return name
-    return None
+                        choices=[o.value for o in VariableOrder],
+                        default=VariableOrder.CLUSTERED.value,
+                        help="BDD variable order (symbolic solver)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,69 +45,49 @@ def run(args: argparse.Namespace) -> int:
     composite, unknown COMPOSITE, a goal synthesis cannot pose as a game) is a diagnostic
     rendered with its source line, and exit code 1.
     """
-    import difflib
-
-    from iterplan_compiler.diagnostics import Span, error, has_errors, render
-
-    try:
-        from iterplan_compiler.frontend import load_with_sources
-    except ImportError as exc:
-        print(f"iterc synth: the front-end is not available ({exc})", file=sys.stderr)
-        return 3
-    from iterplan_compiler.synthesis.driver import synthesize
-
-    model, diags, sources = load_with_sources(args.spec)
-    if diags:
-        print(render(diags, sources), file=sys.stderr)
-    if model is None or has_errors(diags):
+    elab = pipeline.load(args.spec)
+    if elab.diagnostics:
+        print(render(elab.diagnostics, elab.sources), file=sys.stderr)
+    if not elab.ok:
         return 1
-    whole_file = Span(args.spec, 0, 0)
-    name = args.composite
-    if name is None:
-        name = _pick_composite(model)
-        if name is None:
-            print(render([error("E502", "no controller composite to synthesise (write "
-                                "`controller ||C = (Plant)~{Spec}.`)", whole_file)]),
-                  file=sys.stderr)
-            return 1
-    elif name not in model.composites:
-        close = difflib.get_close_matches(name, model.composites, n=1)
-        hint = f"; did you mean '{close[0]}'?" if close else ""
-        print(render([error("E502", f"no composite named '{name}'{hint}", whole_file)]),
-              file=sys.stderr)
+    name = pipeline.pick_composite(elab, args.composite)
+    if isinstance(name, Diagnostic):
+        print(render([name]), file=sys.stderr)
         return 1
-    problem, pdiags = model.synthesis_problem(name)
-    if pdiags:
-        print(render(pdiags, sources), file=sys.stderr)
-    if problem is None or has_errors(pdiags):
+    posed = pipeline.pose(elab, name)
+    if posed.diagnostics:
+        print(render(posed.diagnostics, elab.sources), file=sys.stderr)
+    options = pipeline.SynthesisOptions(Solver(args.solver), explain=args.explain,
+                                        order=VariableOrder(args.order))
+    synth = pipeline.synthesise(posed, options)
+    result = synth.result
+    if result is None:
         return 1
-    result = synthesize(problem, solver=args.solver, explain=args.explain, order=args.order)
     print(format_report(name, result))
     if result.diagnostics:
-        # why the problem could not be posed as a game (e.g. S002): shown with the verdict
-        print(render(list(result.diagnostics), sources), file=sys.stderr)
+        print(render(list(result.diagnostics), elab.sources), file=sys.stderr)
     if not result.realizable and args.explain and result.explanation:
         print(result.explanation)
     return 0 if result.realizable else 1
 
 
-def format_report(name: str, result) -> str:
+def format_report(name: str, result: SynthesisResult) -> str:
     """The human-readable report printed by ``iterc synth``."""
     st = result.stats
-    how = f"{st.get('solver')} solver" + (f", {st['mode']} semantics" if "mode" in st else "")
+    how = f"{st.solver} solver" + (f", {st.mode} semantics" if st.mode is not None else "")
     lines = [f"{name}: {'realizable' if result.realizable else 'UNREALIZABLE'} ({how})"]
-    if "game_states" in st:
-        lines.append(f"  game: {st.get('game_states', '?')} states"
-                     + (f", winning {st['winning_states']}" if "winning_states" in st else "")
-                     + (f", |T| = {st['trans_bdd_nodes']} BDD nodes over {st['bdd_vars']} vars"
-                        if "trans_bdd_nodes" in st else ""))
+    if st.game_states is not None:
+        lines.append(f"  game: {st.game_states} states"
+                     + (f", winning {st.winning_states}" if st.winning_states is not None
+                        else "")
+                     + (f", |T| = {st.trans_bdd_nodes} BDD nodes over {st.bdd_vars} vars"
+                        if st.trans_bdd_nodes is not None else ""))
     if result.realizable:
-        lines.append(f"  controller: {st.get('controller_states')} states, "
-                     f"{st.get('controller_transitions')} transitions; controlled system "
-                     f"{st.get('composition_states')} states")
-    phases = [k for k in st if k.startswith("t_")]
-    if phases:
-        lines.append("  time: " + ", ".join(f"{k[2:]} {st[k]:.3f}s" for k in phases))
-    for w in st.get("warnings", ()):
+        lines.append(f"  controller: {st.controller_states} states, "
+                     f"{st.controller_transitions} transitions; controlled system "
+                     f"{st.composition_states} states")
+    if st.times:
+        lines.append("  time: " + ", ".join(f"{k} {v:.3f}s" for k, v in st.times))
+    for w in st.warnings:
         lines.append(f"  warning: {w}")
     return "\n".join(lines)

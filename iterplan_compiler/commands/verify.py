@@ -16,12 +16,16 @@ import difflib
 import sys
 from pathlib import Path
 
+from iterplan_compiler import limits, pipeline
 from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors, render
+from iterplan_compiler.fltl.check import check_assert
+from iterplan_compiler.fltl.semantics import subformulas
+from iterplan_compiler.ir.formulas import Always, Eventually, Next, Until, WeakUntil
 
 HELP = "model-check an FLTL assert on a composite"
 
-E_NO_SUCH_ASSERT = "E304"
-E_NO_SUCH_TARGET = "E305"
+E_NO_SUCH_ASSERT = "E0607"
+E_NO_SUCH_TARGET = "E0608"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -38,35 +42,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     # resource-limit flags of limits.py, added by cli.py
 
 
-def _sources(args: argparse.Namespace, model) -> dict[str, str]:
-    sources: dict[str, str] = {}
-    extra = getattr(model, "sources", None) if model is not None else None
-    if isinstance(extra, dict):
-        sources.update({str(k): v for k, v in extra.items() if isinstance(v, str)})
-    if model is not None and getattr(model, "source_text", None) is not None:
-        sources[str(model.source_path)] = model.source_text
-    try:
-        text = Path(args.spec).read_text(encoding="utf-8-sig", errors="replace")
-    except OSError:
-        return sources
-    sources.setdefault(args.spec, text)
-    sources.setdefault(str(Path(args.spec)), text)
-    return sources
-
-
 def _missing(name: str, known, spec: str, *, what: str = "assert",
              code: str = E_NO_SUCH_ASSERT) -> Diagnostic:
     hint = difflib.get_close_matches(name, sorted(known), n=1)
     extra = f" (did you mean '{hint[0]}'?)" if hint else ""
-    # Line 0 = "the file as a whole": renders as `SPEC: error[E304]: ...`.
+    # Line 0 = "the file as a whole": renders as `SPEC: error[E0607]: ...`.
     return error(code, f"no {what} named '{name}' in {Path(spec).name}{extra}",
                  Span(spec, 0, 0))
 
 
 def _is_state_formula(formula) -> bool:
     """True iff ``formula`` has no temporal operator (X, [], <>, U, W)."""
-    from iterplan_compiler.fltl.semantics import subformulas
-    from iterplan_compiler.ir.formulas import Always, Eventually, Next, Until, WeakUntil
 
     temporal = (Next, Always, Eventually, Until, WeakUntil)
     return not any(isinstance(f, temporal) for f in subformulas(formula))
@@ -74,13 +60,10 @@ def _is_state_formula(formula) -> bool:
 
 def run(args: argparse.Namespace) -> int:
     """Check; diagnostics to stderr, verdicts and traces to stdout."""
-    from iterplan_compiler import frontend, limits
-    from iterplan_compiler.fltl.check import check_assert
-
     # A missing or unreadable SPEC is an input error the front-end reports (E0800, exit 1),
     # the same as for `iterc check`/`iterc lts`.
-    model, diags = frontend.load(args.spec)
-    diags = list(diags)
+    elab = pipeline.load(args.spec)
+    model, diags, sources = elab.model, list(elab.diagnostics), elab.sources
     named = []
     if model is not None:
         for name in args.asserts:
@@ -89,28 +72,28 @@ def run(args: argparse.Namespace) -> int:
                 diags.append(_missing(name, model.formulas, args.spec))
             else:
                 named.append(nf)
-    names = getattr(model, "names", None) if model is not None else None
-    if callable(names) and args.target not in set(names()):
+    if model is not None and args.target not in set(model.names()):
         # Checked here (not left to build_lts) so the message names SPEC and suggests a name.
-        diags.append(_missing(args.target, names(), args.spec, what="process or composite",
-                              code=E_NO_SUCH_TARGET))
+        diags.append(_missing(args.target, model.names(), args.spec,
+                              what="process or composite", code=E_NO_SUCH_TARGET))
     lts = None
     if model is not None and not has_errors(diags):
-        lts, more = model.build_lts(args.target)
-        diags.extend(more)
-    if has_errors(diags) or lts is None:
+        built = pipeline.build(elab, args.target, pipeline.BuildMode.SOLVE)
+        lts = built.lts
+        diags.extend(built.diagnostics)
+    if has_errors(diags) or lts is None or model is None:
         if diags:
-            print(render(diags, _sources(args, model)), file=sys.stderr)
+            print(render(diags, sources), file=sys.stderr)
         return 1
     if diags:
-        print(render(diags, _sources(args, model)), file=sys.stderr)
+        print(render(diags, sources), file=sys.stderr)
 
     failed = False
     for nf in named:
         result, cdiags = check_assert(lts, nf, model.fluents, fair=not args.unfair,
                                       max_states=limits.current().max_states)
         if cdiags:
-            print(render(cdiags, _sources(args, model)), file=sys.stderr)
+            print(render(cdiags, sources), file=sys.stderr)
         if result is None:
             failed = True
             continue
@@ -120,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
             failed = True
             print(f"assert {nf.name} on {args.target}: Violation of LTL property {nf.name}")
             print(f"Trace to property violation in {args.target}:")
-            print(result.counterexample.render())
+            if result.counterexample is not None:
+                print(result.counterexample.render())
             if _is_state_formula(nf.formula):
                 # A frequent surprise: `assert G = (F)` means []<>F only as a controllerSpec
                 # liveness goal; checked on its own it is a condition on the first position.

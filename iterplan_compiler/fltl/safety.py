@@ -20,10 +20,12 @@ Construction (no per-pattern special cases):
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
+from iterplan_compiler.fltl import safety_cache
 from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
 from iterplan_compiler.fltl.progression import FormulaAutomaton, State
 from iterplan_compiler.fltl.semantics import UnknownFluentError
@@ -32,10 +34,10 @@ from iterplan_compiler.ir.lts import ERROR, LTS, make_lts, reachable
 from iterplan_compiler.ir.minimise import minimise
 
 # Stable diagnostic codes of the FLTL stage.
-E_UNKNOWN_FLUENT = "E301"
-E_NOT_SAFETY = "E302"
-E_TOO_LARGE = "E303"
-W_UNSATISFIABLE = "W301"
+E_UNKNOWN_FLUENT = "E0604"
+E_NOT_SAFETY = "E0605"
+E_TOO_LARGE = "E0606"
+W_UNSATISFIABLE = "W0604"
 
 DEFAULT_MAX_STATES = 200_000
 
@@ -115,9 +117,9 @@ def safety_lts(
     """Compile an ``ltl_property`` (``constraint=False``) or ``constraint`` into its minimal
     deterministic safety LTS over Σφ (+ ``named.extra_alphabet``).
 
-    Returns ``(None, [error])`` for an unknown fluent (E301), a formula that is not a safety
-    formula (E302, with a witness trace) or an automaton beyond ``max_states`` (E303).  An
-    unsatisfiable formula gives a warning (W301): every action leads to ERROR.
+    Returns ``(None, [error])`` for an unknown fluent (E0604), a formula that is not a safety
+    formula (E0605, with a witness trace) or an automaton beyond ``max_states`` (E0606).  An
+    unsatisfiable formula gives a warning (W0604): every action leads to ERROR.
     """
     kind = "constraint" if constraint else "ltl_property"
     diags: list[Diagnostic] = []
@@ -125,6 +127,12 @@ def safety_lts(
     if too_large is not None:
         return None, [error("E0603", f"{kind} {named.name}: {too_large}", named.span)]
     max_states = min(max_states, limits.current().max_states)
+    key = safety_cache.cache_key(named, fluents, constraint=constraint, max_states=max_states)
+    cached = safety_cache.load(key, named.name)
+    if cached is not None:
+        lts, unsatisfiable = cached
+        return lts, [_unsatisfiable(kind, named)] if unsatisfiable else []
+    started = time.process_time()
     try:
         dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
@@ -149,11 +157,17 @@ def safety_lts(
             named.span,
         )]
     if not subsets[0]:
-        diags.append(warning(W_UNSATISFIABLE, f"{kind} {named.name} is unsatisfiable: "
-                                              "every action violates it", named.span))
+        diags.append(_unsatisfiable(kind, named))
     lts = minimise(dfa, named.name)
     if constraint:
         lts = reachable(make_lts(lts.name, lts.num_states,
                                  [t for t in lts.transitions if t[2] != ERROR],
                                  lts.alphabet, lts.initial))
+    if time.process_time() - started >= safety_cache.WORTH_CACHING_S:
+        safety_cache.store(key, lts, not subsets[0])
     return lts, diags
+
+
+def _unsatisfiable(kind: str, named: NamedFormula) -> Diagnostic:
+    return warning(W_UNSATISFIABLE, f"{kind} {named.name} is unsatisfiable: every action "
+                                    "violates it", named.span)

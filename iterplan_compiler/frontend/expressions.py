@@ -12,6 +12,7 @@ E0204 empty range, E0206 bad def call, E0207 non-integer index.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -23,11 +24,23 @@ Value = int | Fraction | str
 
 
 class EvalError(Exception):
-    """A user error found while evaluating; ``diag`` is the diagnostic to report."""
+    """A user error found while evaluating; ``diag`` is the diagnostic to report.
 
-    def __init__(self, diag: Diagnostic):
+    ``consequential`` errors follow from an error already reported (a use of a ``const`` or
+    ``range`` whose own declaration failed): callers do not report them again (:func:`report`),
+    so one mistake gives one diagnostic, not a cascade of "undefined".
+    """
+
+    def __init__(self, diag: Diagnostic, consequential: bool = False):
         super().__init__(diag.message)
         self.diag = diag
+        self.consequential = consequential
+
+
+def report(diags: list[Diagnostic], e: EvalError) -> None:
+    """Append ``e``'s diagnostic to ``diags`` unless it is consequential."""
+    if not e.consequential:
+        diags.append(e.diag)
 
 
 def fail(code: str, message: str, span: Span) -> EvalError:
@@ -42,6 +55,30 @@ class Tables:
     ranges: Mapping[str, tuple[int, int]] = field(default_factory=dict)
     sets: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     defs: Mapping[str, S.DefDecl] = field(default_factory=dict)
+    #: names whose declaration failed to evaluate (already reported)
+    failed: AbstractSet[str] = frozenset()
+
+    def kind_of(self, name: str) -> str | None:
+        """What ``name`` is declared as (``"constant"``, ``"range"``, ``"set"``), if anything."""
+        for kind, table in (("constant", self.consts), ("range", self.ranges),
+                            ("set", self.sets)):
+            if name in table:
+                return kind
+        return None
+
+
+def undefined(wanted: str, name: str, span: Span, tables: Tables) -> EvalError:
+    """E0201 for ``name`` used as a ``wanted`` (e.g. ``"constant"``) that is not one.
+
+    A name whose declaration failed gives a consequential error (not reported again); a name
+    declared as something else says what it is ("S is a set, not a constant")."""
+    if name in tables.failed:
+        return EvalError(error("E0201", f"'{name}' cannot be used: its declaration has errors",
+                               span), consequential=True)
+    kind = tables.kind_of(name)
+    if kind is not None and not wanted.startswith(kind) and kind not in wanted.split(" or "):
+        return fail("E0201", f"'{name}' is a {kind}, not a {wanted}", span)
+    return fail("E0201", f"undefined {wanted} '{name}'", span)
 
 
 @dataclass(frozen=True)
@@ -114,7 +151,7 @@ def evaluate(e: S.Expr, env: Env, depth: int = 0) -> Value:
             return env.params[e.name]
         if e.name in env.tables.consts:
             return env.tables.consts[e.name]
-        raise fail("E0201", f"undefined constant '{e.name}'", e.span)
+        raise undefined("constant", e.name, e.span, env.tables)
     if isinstance(e, S.Call):
         d = env.tables.defs.get(e.name)
         if d is None:
@@ -267,7 +304,7 @@ def bind_values(b: S.Bind, env: Env) -> list[Value]:
             return _checked_range(lo, hi, r.span)
         if r.name in env.tables.sets:
             return list(env.tables.sets[r.name])
-        raise fail("E0201", f"undefined range or set '{r.name}'", r.span)
+        raise undefined("range or set", r.name, r.span, env.tables)
     if isinstance(r, S.RangeLit):
         return range_values(r.low, r.high, env, r.span)
     return list(expand_set(r, env))
@@ -282,7 +319,7 @@ def part_values(p: S.Part, env: Env) -> Iterator[tuple[str, Env]]:
             for s in env.tables.sets[p.name]:
                 yield s, env
         else:
-            raise fail("E0201", f"undefined set '{p.name}'", p.span)
+            raise undefined("set", p.name, p.span, env.tables)
     elif isinstance(p, S.Index):
         if isinstance(p.expr, S.Name) and p.expr.name not in env.params \
                 and p.expr.name not in env.tables.consts:
@@ -339,7 +376,7 @@ def expand_set(s: S.LabelSetRef, env: Env) -> tuple[str, ...]:
     if isinstance(s, S.SetName):
         if s.name in env.tables.sets:
             return env.tables.sets[s.name]
-        raise fail("E0201", f"undefined set '{s.name}'", s.span)
+        raise undefined("set", s.name, s.span, env.tables)
     out: dict[str, None] = {}
     for item in s.items:
         for x in expand_label(item, env):

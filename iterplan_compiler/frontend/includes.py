@@ -2,7 +2,8 @@
 
 The path is resolved relative to the including file, then in the bundled ``stdlib/``
 (package ``iterplan_compiler.stdlib``).  Included declarations are spliced in at the include
-position.  Codes: E0801 file not found, E0802 include cycle.
+position.  Codes: E0801 file not found or not readable, E0802 include cycle (the message shows the
+chain of includes).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pathlib import Path
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
+from iterplan_compiler.frontend.source import decode, read_spec
 
 
 def _resolve(name: str, including: str) -> tuple[str, str] | str | None:
@@ -22,10 +24,11 @@ def _resolve(name: str, including: str) -> tuple[str, str] | str | None:
     try:
         cand = base / name
         if cand.is_file():
-            return str(cand), cand.read_text(encoding="utf-8-sig", errors="replace")
+            text = read_spec(cand)
+            return (str(cand), text) if isinstance(text, str) else "not a text file"
         res = importlib.resources.files("iterplan_compiler.stdlib").joinpath(name)
         if res.is_file():
-            return f"<stdlib>/{name}", res.read_text(encoding="utf-8", errors="replace")
+            return f"<stdlib>/{name}", decode(res.read_bytes())
     except (OSError, ValueError) as e:  # ValueError: an embedded NUL byte
         return getattr(e, "strerror", None) or str(e)
     return None
@@ -50,7 +53,10 @@ def expand_includes(spec: S.SpecFile, sources: dict[str, str], diags: list[Diagn
             continue
         path, text = found
         if path in stack or path == spec.path:
-            diags.append(error("E0802", f"include cycle: '{d.path}' includes itself", d.span))
+            chain = [*stack, spec.path]
+            chain = chain[chain.index(path):] if path in chain else chain
+            shown_chain = " includes ".join(f"'{p}'" for p in [*chain, path])
+            diags.append(error("E0802", f"include cycle: {shown_chain}", d.span))
             continue
         sources[path] = text
         sub, ds = parse_text(text, path)

@@ -2,7 +2,7 @@
 and ``starenv`` (§1.7).
 
 Kept here (rather than in ``ir/``) because they need a controllerSpec's controllable set; the
-synthesis layer may import :func:`controlled_determinisation` too (MTSA's "legal controllers"
+synthesis layer may use :func:`controlled_determinisation` too (MTSA's "legal controllers"
 path for nondeterministic plants uses the same construction).
 """
 

@@ -7,13 +7,14 @@ so ``{a,b} -> c -> P`` shares one intermediate state.  A reference to an undefin
 becomes a transition to ERROR with warning W0301 (MTSA's idiom).
 
 Codes: W0301 local defined to be ERROR, E0302 local state defined twice, E0303 alias cycle,
-E0304 `property` process not deterministic, E0305 `;` item is not sequential.
+E0305 `;` item is not sequential.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, Related, Span, error, warning
@@ -27,6 +28,7 @@ from iterplan_compiler.frontend.expressions import (
     expand_label_env,
     fmt,
     part_values,
+    report,
     truth,
 )
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU, make_lts
@@ -199,8 +201,8 @@ class _Builder:
         Python's recursion limit); it numbers states and emits transitions in the same order
         as the obvious recursive version: a state is created when first reached, the move
         into it is recorded once the chain behind it is done."""
-        Frame = list  # [state, index, label iterator, pending transition or None]
-        stack: list[Frame] = [[s, i, iter(expand_label_env(c.labels[i], env)), None]]
+        # a frame: [state, index, label iterator, pending transition or None]
+        stack: list[list[Any]] = [[s, i, iter(expand_label_env(c.labels[i], env)), None]]
         while stack:
             frame = stack[-1]
             if frame[3] is not None:
@@ -281,7 +283,7 @@ def build_process(decl: S.ProcessDecl, env: Env, name: str, get_process: Process
         b.collect_locals()
         init = b.local_state(decl.name, decl.span)
     except EvalError as e:
-        diags.append(e.diag)
+        report(diags, e)
         return None
     trans = b.trans
     n = b.n

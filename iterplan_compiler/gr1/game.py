@@ -30,16 +30,9 @@ from typing import Any
 
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec, variables_of
+from iterplan_compiler.symbolic import bdd as _bdd
 
 Node = Any
-
-try:  # the fused operators exist only in the CUDD bindings
-    from dd.cudd import and_exists as _cudd_and_exists
-    from dd.cudd import or_forall as _cudd_or_forall
-except ImportError:  # pragma: no cover - exercised only without dd.cudd
-    _cudd_and_exists = None
-    _cudd_or_forall = None
-
 
 def prime_name(name: str) -> str:
     """Name of the primed (next-state) BDD variable of ``name``."""
@@ -50,9 +43,12 @@ def prime_name(name: str) -> str:
 class GameOptions:
     """How to build the BDDs of a game.
 
-    ``order``: ``"interleaved"`` or ``"blocked"``; ``group_pairs``: CUDD reordering groups
-    for ``(v, v')`` (interleaved order only); ``reordering``: CUDD dynamic reordering (group
-    sifting, the only method dd exposes); ``max_growth``: CUDD's sifting growth bound;
+    ``order``: ``"interleaved"``, ``"blocked"`` or ``"spec"`` (:func:`spec_order`);
+    ``group_pairs``: CUDD reordering groups for ``(v, v')`` (interleaved order only);
+    ``reordering``: CUDD dynamic reordering (group sifting, the only method dd exposes);
+    ``sift_after_build``: with ``reordering``, one explicit sifting pass once the
+    partitioned relations exist (see :func:`build_game`); ``max_growth``: CUDD's sifting
+    growth bound;
     ``partition``: keep the transition relations as quantification-scheduled clusters
     (otherwise one monolithic BDD per player); ``cluster_nodes``: cluster size bound.
     """
@@ -60,6 +56,7 @@ class GameOptions:
     order: str = "interleaved"
     group_pairs: bool = False
     reordering: bool = True
+    sift_after_build: bool = True
     max_growth: float | None = None
     partition: bool = True
     cluster_nodes: int = 5000
@@ -96,6 +93,8 @@ class Game:
     stats: dict[str, Any] = field(default_factory=dict)
 
     _mono: dict[str, Node] = field(default_factory=dict)
+    _swap_map: dict[str, str] | None = None
+    _is_cudd: bool = False
 
     @property
     def env_trans(self) -> Node:
@@ -131,30 +130,22 @@ class Game:
     # --- operators -------------------------------------------------------------------------
     def prime(self, u: Node) -> Node:
         """Rename a *state* predicate (current variables only) to the next-state copy."""
-        names = self.inputs + self.outputs
-        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
+        if self._swap_map is None:
+            self._swap_map = {v: prime_name(v) for v in self.inputs + self.outputs}
+            self._is_cudd = _bdd.backend_of(self.bdd) == "cudd"
+        if self._is_cudd:
             # CUDD's variable swap is much cheaper than vector composition; it is exact
             # because ``u`` mentions no primed variable.
-            return self.bdd._swap(u, {v: prime_name(v) for v in names})
-        return self.bdd.let({v: self.bdd.var(prime_name(v)) for v in names}, u)
+            return self.bdd._swap(u, self._swap_map)
+        return self.bdd.let({v: self.bdd.var(p) for v, p in self._swap_map.items()}, u)
 
     def and_exists(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
-        """``∃ qvars. u ∧ v`` (fused in CUDD)."""
-        q = set(qvars)
-        if not q:
-            return u & v
-        if _cudd_and_exists is not None and hasattr(self.bdd, "_swap"):
-            return _cudd_and_exists(u, v, q)
-        return self.bdd.exist(q, u & v)
+        """``∃ qvars. u ∧ v`` (fused in CUDD; :func:`symbolic.bdd.and_exists`)."""
+        return _bdd.and_exists(self.bdd, u, v, qvars)
 
     def or_forall(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
-        """``∀ qvars. u ∨ v`` (fused in CUDD)."""
-        q = set(qvars)
-        if not q:
-            return u | v
-        if _cudd_or_forall is not None and hasattr(self.bdd, "_swap"):
-            return _cudd_or_forall(u, v, q)
-        return self.bdd.forall(q, u | v)
+        """``∀ qvars. u ∨ v`` (fused in CUDD; :func:`symbolic.bdd.or_forall`)."""
+        return _bdd.or_forall(self.bdd, u, v, qvars)
 
     def cpre_trans(self, target: Node) -> Node:
         """Mealy controllable predecessor of a transition-level target.
@@ -247,6 +238,35 @@ def _build_expr(bdd: Any, expr: Expr, memo: dict[int, Node]) -> Node:
     return memo[id(expr)]
 
 
+def spec_order(spec: SlugsSpec) -> list[str]:
+    """Variables in order of first occurrence in the spec's formulas (TRANS, then LIVENESS,
+    then INIT lines; left-to-right within a line), then any unused declared ones.
+
+    Variables that one transition line relates end up next to each other, which is what
+    keeps a conjunct's BDD small: with declaration order (all inputs, then all outputs) a
+    line family like ``b_i ∧ f_i → ¬b_i'`` (gr1c's lift) makes the conjunction of the lines
+    exponential in ``n`` until sifting repairs it.
+    """
+    seen: dict[str, None] = {}
+    for sec in ("ENV_TRANS", "SYS_TRANS", "ENV_LIVENESS", "SYS_LIVENESS", "ENV_INIT",
+                "SYS_INIT"):
+        for line in spec.lines(sec):
+            visited: set[int] = set()
+            stack = [line.expr]
+            while stack:
+                e = stack.pop()
+                if id(e) in visited:
+                    continue
+                visited.add(id(e))
+                if e.op == "var":
+                    seen.setdefault(e.name, None)
+                else:
+                    stack.extend(reversed(e.args))
+    for v in list(spec.inputs) + list(spec.outputs):
+        seen.setdefault(v, None)
+    return list(seen)
+
+
 def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
     if options.order == "blocked":
         bdd.declare(*names)
@@ -259,8 +279,11 @@ def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
 
 
 def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int,
-              support_of) -> tuple[list[Part], frozenset[str]]:
-    """Cluster ``parts`` (in order) up to ``limit`` nodes; attach early-quantifiable vars."""
+              support_of, precheck: bool = False) -> tuple[list[Part], frozenset[str]]:
+    """Cluster ``parts`` (in order) up to ``limit`` nodes; attach early-quantifiable vars.
+
+    ``precheck``: do not even try a conjunction whose operands together exceed ``limit``
+    (re-clustering big clusters would otherwise conjoin them just to reject the result)."""
     clusters: list[Node] = []
     cur = None
     for p in parts:
@@ -269,8 +292,8 @@ def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int
         if cur is None:
             cur = p
             continue
-        cand = cur & p
-        if len(cand) <= limit:
+        cand = None if precheck and len(cur) + len(p) > limit else cur & p
+        if cand is not None and len(cand) <= limit:
             cur = cand
         else:
             clusters.append(cur)
@@ -290,6 +313,37 @@ def _schedule(game_bdd: Any, parts: list[Node], qvars: Sequence[str], limit: int
     for c, lq in zip(clusters, last_q, strict=True):
         out.append(Part(c, lq))
     return out, pre_q
+
+
+def _recluster(bdd: Any, parts: list[Part], pre_q: frozenset[str], qvars: Sequence[str],
+               options: GameOptions, support_of: Any) -> tuple[list[Part], frozenset[str]]:
+    """:func:`_schedule` again over existing clusters (same conjunction; a variable that
+    dropped out of every support joins the up-front quantified ones)."""
+    new_parts, new_pre = _schedule(bdd, [p.bdd for p in parts], qvars, options.cluster_nodes,
+                                   support_of, precheck=True)
+    return new_parts, pre_q | new_pre
+
+
+def _sift_after_build(bdd: Any, options: GameOptions, support_of: Any, xp: Sequence[str],
+                      yp: Sequence[str],
+                      parts: tuple[list[Part], frozenset[str], list[Part], frozenset[str]]
+                      ) -> tuple[list[Part], frozenset[str], list[Part], frozenset[str]]:
+    """One explicit sifting pass with the partitioned relations alive, then re-clustering.
+
+    Dynamic sifting during the build optimises the order for whatever is alive at the
+    time (single lines, partial formulas), and every reordering raises CUDD's next trigger
+    threshold, so the small fixpoint BDDs may never trigger a repair.  One pass now, with
+    exactly the relations the fixpoint uses alive, adapts the order to them: gr1c's lift
+    n=50 went from > 100 s to ~2 s CPU (its environment lines b_i ∧ f_i → ¬b_i' had been
+    cut into 13 k-node clusters; after the pass they conjoin to one of ~1 k nodes).  The
+    clusters were cut at ``cluster_nodes`` under the old order, so they are scheduled again.
+    """
+    env_parts, env_pre, sys_parts, sys_pre = parts
+    bdd.reorder()
+    if options.partition:
+        env_parts, env_pre = _recluster(bdd, env_parts, env_pre, xp, options, support_of)
+        sys_parts, sys_pre = _recluster(bdd, sys_parts, sys_pre, yp, options, support_of)
+    return env_parts, env_pre, sys_parts, sys_pre
 
 
 def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
@@ -319,7 +373,8 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
     if options.max_growth is not None:
         cfg["max_growth"] = options.max_growth
     bdd.configure(**cfg)
-    _declare(bdd, list(spec.inputs) + list(spec.outputs), options)
+    names = spec_order(spec) if options.order == "spec" else list(spec.inputs) + list(spec.outputs)
+    _declare(bdd, names, options)
 
     memo: dict[int, Node] = {}
 
@@ -342,6 +397,9 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
         sys_parts, sys_pre = _schedule(bdd, sys_trans_l, yp, options.cluster_nodes, support_of)
     else:
         env_parts, env_pre, sys_parts, sys_pre = [], frozenset(), [], frozenset()
+    if options.reordering and options.sift_after_build:
+        env_parts, env_pre, sys_parts, sys_pre = _sift_after_build(
+            bdd, options, support_of, xp, yp, (env_parts, env_pre, sys_parts, sys_pre))
     primed = set(xp) | set(yp)
     live_primed = any(support_of(u) & primed for u in env_live + sys_live)
     game = Game(

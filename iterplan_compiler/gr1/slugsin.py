@@ -224,6 +224,14 @@ def _parse_formula(toks: list[tuple[str, int]], known: set[str]) -> Expr:
     return result
 
 
+def parse_prefix(text: str, known: set[str]) -> Expr | None:
+    """``text`` as one complete prefix formula over the variables ``known``, else None."""
+    try:
+        return _parse_formula(_tokens(text), known)
+    except _ParseError:
+        return None
+
+
 def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Diagnostic]]:
     """Parse slugsin ``text``; return the spec (``None`` on errors) and diagnostics.
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from iterplan_compiler.gr1.game import Game, prime_name
-from iterplan_compiler.gr1.solve import Winning
+from iterplan_compiler.synthesis.fixpoint import Gr1Fixpoint as Winning
 
 Node = Any
 

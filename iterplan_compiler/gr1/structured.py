@@ -330,6 +330,38 @@ class _Parser:
         raise _Error("G112", f"unexpected '{tok}'; an operand is expected", col, col + len(tok))
 
 
+def _prefix_line(line: str, known: set[str]) -> Expr | None:
+    """The line as a slugsin *prefix* formula, or None if it is not one.
+
+    slugs' structured compiler passes lines that already are slugs Polish notation through
+    unchanged; we do the same.  No line means different things in both notations: a prefix
+    formula over more than one operand starts with an operator (``& a b``), which no infix
+    formula does except ``!``, and ``! a`` means the same in both.
+    """
+    return slugsin.parse_prefix(line, known)
+
+
+def _parse_sections(raw: dict[str, list[tuple[int, str]]], sections: dict[str, list[Line]],
+                    bools: set[str], ints: dict[str, IntVar], path: str,
+                    diags: list[Diagnostic]) -> None:
+    """Parse every formula line (prefix pass-through first, then infix) into ``sections``."""
+    known = set(bools) | {b for var in ints.values() for b in var.bits}
+    for sec in FORMULA_SECTIONS:
+        for lineno, line in raw[sec]:
+            col0 = len(line) - len(line.lstrip()) + 1
+            try:
+                expr = _prefix_line(line, known) or _Parser(line, bools, ints).formula()
+            except _Error as exc:
+                diags.append(error(exc.code, f"in [{sec}]: {exc}",
+                                   Span(path, lineno, exc.col, lineno, exc.end_col)))
+                continue
+            except RecursionError:
+                diags.append(error("G112", f"in [{sec}]: formula nested too deeply",
+                                   Span(path, lineno, col0)))
+                continue
+            sections[sec].append(Line(expr, Span(path, lineno, col0)))
+
+
 def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Diagnostic]]:
     """Parse structuredslugs ``text`` into an equivalent Boolean :class:`SlugsSpec`.
 
@@ -410,20 +442,7 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
         who = owner[name]
         sections[f"{who}_INIT"].append(Line(_at_most(var, size - 1, False), sp))
         sections[f"{who}_TRANS"].append(Line(_at_most(var, size - 1, True), sp))
-    for sec in FORMULA_SECTIONS:
-        for lineno, line in raw[sec]:
-            col0 = len(line) - len(line.lstrip()) + 1
-            try:
-                expr = _Parser(line, bools, ints).formula()
-            except _Error as exc:
-                diags.append(error(exc.code, f"in [{sec}]: {exc}",
-                                   Span(path, lineno, exc.col, lineno, exc.end_col)))
-                continue
-            except RecursionError:
-                diags.append(error("G112", f"in [{sec}]: formula nested too deeply",
-                                   Span(path, lineno, col0)))
-                continue
-            sections[sec].append(Line(expr, Span(path, lineno, col0)))
+    _parse_sections(raw, sections, bools, ints, path, diags)
     if any(d.is_error for d in diags):
         return None, diags
     return SlugsSpec(tuple(inputs), tuple(outputs),

@@ -31,6 +31,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from .compose import label_matcher
+from .graphs import strongly_connected
 from .lts import ERROR, LTS, TAU
 
 __all__ = [
@@ -150,53 +151,9 @@ def check_safety(lts: LTS) -> SafetyResult:
 
 
 def _sccs(nodes: Iterable[int], out: list[list[tuple[str, int]]]) -> list[list[int]]:
-    """Strongly connected components of the graph restricted to ``nodes`` (iterative Tarjan,
-    no recursion limit on long chains)."""
-    index: dict[int, int] = {}
-    low: dict[int, int] = {}
-    on_stack: set[int] = set()
-    stack: list[int] = []
-    result: list[list[int]] = []
-    counter = 0
-    for root in nodes:
-        if root in index:
-            continue
-        work = [(root, 0)]
-        index[root] = low[root] = counter
-        counter += 1
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            v, i = work[-1]
-            edges = out[v]
-            if i < len(edges):
-                work[-1] = (v, i + 1)
-                w = edges[i][1]
-                if w == ERROR:
-                    continue
-                if w not in index:
-                    index[w] = low[w] = counter
-                    counter += 1
-                    stack.append(w)
-                    on_stack.add(w)
-                    work.append((w, 0))
-                elif w in on_stack:
-                    low[v] = min(low[v], index[w])
-                continue
-            work.pop()
-            if work:
-                u = work[-1][0]
-                low[u] = min(low[u], low[v])
-            if low[v] == index[v]:
-                comp = []
-                while True:
-                    w = stack.pop()
-                    on_stack.discard(w)
-                    comp.append(w)
-                    if w == v:
-                        break
-                result.append(comp)
-    return result
+    """Strongly connected components of the graph restricted to ``nodes``, ERROR left out
+    (:func:`~iterplan_compiler.ir.graphs.strongly_connected`)."""
+    return strongly_connected(nodes, lambda v: [t for _, t in out[v] if t != ERROR])
 
 
 def terminal_sets(lts: LTS) -> list[TerminalSet]:

@@ -116,65 +116,11 @@ def _explore(
     if n == 0:
         return [0], [], [], decode
 
-    # Who owns each non-tau label: the components that must agree for it to fire.
-    owners: dict[str, list[int]] = {}
-    for i, c in enumerate(components):
-        for a in c.alphabet:
-            owners.setdefault(a, []).append(i)
+    local, lead, lookup = _move_tables(components, sizes, weights)
+    prio_match, prio_high = (None, False) if priority is None else (
+        label_matcher(priority[0]), priority[1])
 
-    # Per component and state, precompute (a delta is (target - source) * weight, None = ERROR):
-    #   local[i][s]  : [(label, delta)] for tau and labels owned only by component i
-    #   lead[i][s]   : [(label, [deltas], other_owner_indices)] for shared labels whose lowest
-    #                  owner is i (the lowest owner "drives" the synchronisation)
-    #   lookup[i][s] : {label: [deltas]} for shared labels (consulted by the driver)
-    local: list[list[list[tuple[str, int | None]]]] = []
-    lead: list[list[list[tuple[str, list[int | None], list[int]]]]] = []
-    lookup: list[list[dict[str, list[int | None]]]] = []
-    for i, c in enumerate(components):
-        w = weights[i]
-        by_state: list[dict[str, list[int | None]]] = [{} for _ in range(sizes[i])]
-        for s, a, t in c.transitions:
-            by_state[s].setdefault(a, []).append(None if t == ERROR else (t - s) * w)
-        loc_i: list[list[tuple[str, int | None]]] = []
-        lead_i: list[list[tuple[str, list[int | None], list[int]]]] = []
-        look_i: list[dict[str, list[int | None]]] = []
-        for moves in by_state:
-            loc: list[tuple[str, int | None]] = []
-            led: list[tuple[str, list[int | None], list[int]]] = []
-            look: dict[str, list[int | None]] = {}
-            for a, ds in moves.items():
-                own = owners.get(a)
-                if a == TAU or own is None or len(own) == 1:
-                    # A label used on a transition but missing from the alphabet cannot happen
-                    # for make_lts-built machines; treat it as private to stay total.
-                    loc.extend((a, d) for d in ds)
-                else:
-                    look[a] = ds
-                    if own[0] == i:
-                        led.append((a, ds, own[1:]))
-            loc_i.append(loc)
-            lead_i.append(led)
-            look_i.append(look)
-        local.append(loc_i)
-        lead.append(lead_i)
-        lookup.append(look_i)
-
-    prio_match: Callable[[str], bool] | None = None
-    prio_high = False
-    if priority is not None:
-        labels, prio_high = priority
-        prio_match = label_matcher(labels)
-
-    # END (§2.5): the terminating components (those with an END state) must all be in END, and
-    # every label of a non-terminating component must belong to a terminating one (so that
-    # nothing can move any more); with no terminating component there is no END at all.
-    ends = [c.end_states for c in components]
-    terminating = [i for i, c in enumerate(components) if c.end_states]
-    term_alpha: set[str] = set()
-    for i in terminating:
-        term_alpha |= components[i].alphabet
-    can_end = bool(terminating) and all(
-        c.alphabet <= term_alpha for c in components if not c.end_states)
+    ends, terminating, can_end = _end_condition(components)
     start = sum(c.initial * weights[i] for i, c in enumerate(components))
     index: dict[int, int] = {start: 0}
     order: list[int] = [start]
@@ -188,35 +134,9 @@ def _explore(
         src = head
         head += 1
         cur = decode(code)
-        moves: list[tuple[str, int]] = []
-        for i in comp_range:
-            si = cur[i]
-            for a, d in local[i][si]:
-                moves.append((a, -1 if d is None else code + d))
-            for a, ds, others in lead[i][si]:
-                choices: list[list[int | None]] = [ds]
-                for j in others:
-                    dj = lookup[j][cur[j]].get(a)
-                    if dj is None:
-                        break
-                    choices.append(dj)
-                else:
-                    if len(choices) == 2 and len(ds) == 1 and len(choices[1]) == 1:
-                        d0, d1 = ds[0], choices[1][0]  # the common case, without itertools
-                        moves.append((a, -1 if d0 is None or d1 is None else code + d0 + d1))
-                        continue
-                    for combo in _cartesian(*choices):
-                        if None in combo:
-                            moves.append((a, -1))
-                        else:
-                            moves.append((a, code + sum(combo)))  # type: ignore[arg-type]
+        moves = _moves(code, cur, comp_range, local, lead, lookup)
         if prio_match is not None and moves:
-            flagged = [prio_match(a) if a != TAU else False for a, _ in moves]
-            if prio_high:
-                if any(flagged):
-                    moves = [m for m, f in zip(moves, flagged, strict=True) if f]
-            elif not all(flagged):
-                moves = [m for m, f in zip(moves, flagged, strict=True) if not f]
+            moves = _prioritised(moves, prio_match, prio_high)
         if not moves:
             if can_end and all(cur[i] in ends[i] for i in terminating):
                 end_states.append(src)
@@ -248,6 +168,116 @@ def _explore(
         out.sort()
         transitions.extend([(src, a, k) for a, k in out])
     return order, transitions, end_states, decode
+
+
+Local = list[list[list[tuple[str, int | None]]]]
+Lead = list[list[list[tuple[str, list[int | None], list[int]]]]]
+Lookup = list[list[dict[str, list[int | None]]]]
+
+
+def _move_tables(components: Sequence[LTS], sizes: list[int], weights: list[int]
+                 ) -> tuple[Local, Lead, Lookup]:
+    """The per-component move tables :func:`_explore` adds to a product code (see below)."""
+    # Who owns each non-tau label: the components that must agree for it to fire.
+    owners: dict[str, list[int]] = {}
+    for i, c in enumerate(components):
+        for a in c.alphabet:
+            owners.setdefault(a, []).append(i)
+
+    # Per component and state, precompute (a delta is (target - source) * weight, None = ERROR):
+    #   local[i][s]  : [(label, delta)] for tau and labels owned only by component i
+    #   lead[i][s]   : [(label, [deltas], other_owner_indices)] for shared labels whose lowest
+    #                  owner is i (the lowest owner "drives" the synchronisation)
+    #   lookup[i][s] : {label: [deltas]} for shared labels (consulted by the driver)
+    local: Local = []
+    lead: Lead = []
+    lookup: Lookup = []
+    for i, c in enumerate(components):
+        w = weights[i]
+        by_state: list[dict[str, list[int | None]]] = [{} for _ in range(sizes[i])]
+        for s, a, t in c.transitions:
+            by_state[s].setdefault(a, []).append(None if t == ERROR else (t - s) * w)
+        loc_i: list[list[tuple[str, int | None]]] = []
+        lead_i: list[list[tuple[str, list[int | None], list[int]]]] = []
+        look_i: list[dict[str, list[int | None]]] = []
+        for by_label in by_state:
+            loc: list[tuple[str, int | None]] = []
+            led: list[tuple[str, list[int | None], list[int]]] = []
+            look: dict[str, list[int | None]] = {}
+            for a, ds in by_label.items():
+                own = owners.get(a)
+                if a == TAU or own is None or len(own) == 1:
+                    # A label used on a transition but missing from the alphabet cannot happen
+                    # for make_lts-built machines; treat it as private to stay total.
+                    loc.extend((a, d) for d in ds)
+                else:
+                    look[a] = ds
+                    if own[0] == i:
+                        led.append((a, ds, own[1:]))
+            loc_i.append(loc)
+            lead_i.append(led)
+            look_i.append(look)
+        local.append(loc_i)
+        lead.append(lead_i)
+        lookup.append(look_i)
+    return local, lead, lookup
+
+
+def _moves(code: int, cur: StateTuple, comp_range: range, local: Local, lead: Lead,
+           lookup: Lookup) -> list[tuple[str, int]]:
+    """The moves ``(label, target code)`` of product state ``code`` (tuple ``cur``), target
+    -1 for ERROR, before priorities and with duplicates."""
+    moves: list[tuple[str, int]] = []
+    for i in comp_range:
+        si = cur[i]
+        for a, d in local[i][si]:
+            moves.append((a, -1 if d is None else code + d))
+        for a, ds, others in lead[i][si]:
+            choices: list[list[int | None]] = [ds]
+            for j in others:
+                dj = lookup[j][cur[j]].get(a)
+                if dj is None:
+                    break
+                choices.append(dj)
+            else:
+                if len(choices) == 2 and len(ds) == 1 and len(choices[1]) == 1:
+                    d0, d1 = ds[0], choices[1][0]  # the common case, without itertools
+                    moves.append((a, -1 if d0 is None or d1 is None else code + d0 + d1))
+                    continue
+                for combo in _cartesian(*choices):
+                    if None in combo:
+                        moves.append((a, -1))
+                    else:
+                        moves.append((a, code + sum(combo)))  # type: ignore[arg-type]
+    return moves
+
+
+def _prioritised(moves: list[tuple[str, int]], prio_match: Callable[[str], bool],
+                 high: bool) -> list[tuple[str, int]]:
+    """``>> {..}``: only the high-priority moves when there are any; ``<< {..}``: the others
+    unless every move is low priority (tau is never prioritised)."""
+    flagged = [prio_match(a) if a != TAU else False for a, _ in moves]
+    if high:
+        if any(flagged):
+            return [m for m, f in zip(moves, flagged, strict=True) if f]
+    elif not all(flagged):
+        return [m for m, f in zip(moves, flagged, strict=True) if not f]
+    return moves
+
+
+def _end_condition(components: Sequence[LTS]) -> tuple[list[frozenset[int]], list[int], bool]:
+    """``(end states per component, terminating components, END possible at all)``."""
+    # END (§2.5): the terminating components (those with an END state) must all be in END, and
+    # every label of a non-terminating component must belong to a terminating one (so that
+    # nothing can move any more); with no terminating component there is no END at all.
+    ends = [c.end_states for c in components]
+    terminating = [i for i, c in enumerate(components) if c.end_states]
+    term_alpha: set[str] = set()
+    for i in terminating:
+        term_alpha |= components[i].alphabet
+    can_end = bool(terminating) and all(
+        c.alphabet <= term_alpha for c in components if not c.end_states)
+    return ends, terminating, can_end
 
 
 def compose(

@@ -7,11 +7,26 @@ synthesis and must keep their field names.
 
 from __future__ import annotations
 
+import enum
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from iterplan_compiler.diagnostics import NO_SPAN, Span
+from iterplan_compiler.diagnostics import NO_SPAN, Diagnostic, Span
 from iterplan_compiler.ir.formulas import Fluent, Formula, NamedFormula
 from iterplan_compiler.ir.lts import LTS
+
+#: Composite keywords that make a composite a synthesis problem (MTSA §1.11, §3.9, §3.10):
+#: building it solves a game.  (``checkCompatibility`` also poses the game, without solving.)
+
+class Unrealizable(enum.Enum):
+    """What building an unrealizable ``controller`` composite gives."""
+
+    #: error E0901, no LTS (``iterc`` commands)
+    ERROR = "error"
+    #: MTSA's composition: the plant the game was played on, ``C_#NC#``, and warning W0902
+    PLANT = "plant"
+
+SYNTHESIS_KEYWORDS = frozenset({"controller", "gr", "heuristic", "monolithicDirector"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,7 +94,8 @@ class ModelBackend:
     elaborator, ``frontend/elaborate.py``).  Kept abstract here so ``ir`` does not import the
     front-end."""
 
-    def build_lts(self, name: str) -> tuple[LTS | None, list]:  # pragma: no cover - interface
+    def build_lts(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR,
+                  solve: bool = True) -> tuple[LTS | None, list[Diagnostic]]:  # pragma: no cover
         raise NotImplementedError
 
     def synthesis_problem(self, name: str) -> tuple[SynthesisProblem | None, list]:  # pragma: no cover
@@ -89,6 +105,9 @@ class ModelBackend:
         raise NotImplementedError
 
     def legality(self, name: str) -> tuple[bool, str]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def synthesis_components(self, name: str) -> tuple[str, ...]:  # pragma: no cover
         raise NotImplementedError
 
 
@@ -112,17 +131,17 @@ class Model:
     source_text: str
     processes: tuple[str, ...]
     composites: tuple[str, ...]
-    composite_keywords: dict[str, frozenset[str]]
-    fluents: dict[str, Fluent]
-    formulas: dict[str, NamedFormula]
-    controller_specs: dict[str, ControllerSpec]
-    constants: dict[str, object]
-    ranges: dict[str, tuple[int, int]]
-    sets: dict[str, tuple[str, ...]]
+    composite_keywords: Mapping[str, frozenset[str]]
+    fluents: Mapping[str, Fluent]
+    formulas: Mapping[str, NamedFormula]
+    controller_specs: Mapping[str, ControllerSpec]
+    constants: Mapping[str, int | float | str]
+    ranges: Mapping[str, tuple[int, int]]
+    sets: Mapping[str, tuple[str, ...]]
     backend: ModelBackend = field(repr=False)
-    sources: dict[str, str] = field(default_factory=dict, repr=False)
+    sources: Mapping[str, str] = field(default_factory=dict, repr=False)
     #: file that declares each process/composite/formula (``source_path`` or an included file)
-    origins: dict[str, str] = field(default_factory=dict, repr=False)
+    origins: Mapping[str, str] = field(default_factory=dict, repr=False)
 
     def names(self) -> tuple[str, ...]:
         """Names accepted by :meth:`build_lts`: processes, composites, ltl_property/constraint."""
@@ -147,16 +166,29 @@ class Model:
             return self.processes[-1]
         return None
 
-    def build_lts(self, name: str, unrealizable: str = "error") -> tuple[LTS | None, list]:
+    def build_lts(self, name: str, unrealizable: Unrealizable = Unrealizable.ERROR,
+                  solve: bool = True) -> tuple[LTS | None, list[Diagnostic]]:
         """Build (compose, apply operators, synthesise when asked) the named machine.
 
         An unrealizable ``controller`` composite is an error (E0901, no LTS) by default; with
-        ``unrealizable="plant"`` it gives MTSA's composition instead: the plant the game was
-        played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
-        W0902."""
-        if unrealizable == "error":
-            return self.backend.build_lts(name)
-        return self.backend.build_lts(name, unrealizable=unrealizable)  # type: ignore[call-arg]
+        ``unrealizable=Unrealizable.PLANT`` it gives MTSA's composition instead: the plant the
+        game was played on, named ``C_#NC#`` (MTSA semantics §3.7/§3.8), and the verdict as warning
+        W0902.  With ``solve=False`` nothing is synthesised: a synthesis composite (also one
+        used as a component) gives the plant its game is played on, under its own name
+        (``iterc lts``)."""
+        return self.backend.build_lts(name, unrealizable, solve)
+
+    def is_synthesis_composite(self, name: str) -> bool:
+        """True for a composite whose keywords ask for synthesis (``controller``, ...)."""
+        return bool(self.composite_keywords.get(name, frozenset()) & SYNTHESIS_KEYWORDS)
+
+    def synthesis_components(self, name: str) -> tuple[str, ...]:
+        """The synthesis composites composite ``name`` uses (directly or through others)."""
+        return self.backend.synthesis_components(name)
+
+    def controller_composites(self) -> tuple[str, ...]:
+        """The synthesis composites, in file order (nothing is built)."""
+        return tuple(c for c in self.composites if self.is_synthesis_composite(c))
 
     def synthesis_problem(self, composite_name: str) -> tuple[SynthesisProblem | None, list]:
         """The resolved synthesis problem of ``controller ||C = (E)~{G}`` (and the other

@@ -127,10 +127,11 @@ def run_bindings(controller: Controller, bindings, *, max_steps: int | None = No
                 elif out is not None:
                     pending.extend(out)
                 continue
-            label = events() if events is not None else None
-            if label is None:
+            answer = events() if events is not None else None
+            if answer is None:
                 stopped = "no_event" if controller.enabled() else "deadlock"
                 break
+            label = answer
         controller.step(label)
         trace.append(label)
         steps += 1

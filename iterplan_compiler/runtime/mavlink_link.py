@@ -11,6 +11,7 @@ checked, the mission upload handshake, STATUSTEXT kept for messages, and a faile
 
 from __future__ import annotations
 
+import functools
 import os
 import threading
 import time
@@ -132,6 +133,11 @@ class MavlinkLink:
     def _emit(self, kind: str, detail: str = "") -> None:
         self._events.append(VehicleEvent(self._boot_t, kind, detail))
 
+    def _mission_item(self, seq: int, frame: int, cmd: int, lat: float, lon: float, alt: float,
+                      m: Any) -> None:
+        m.mission_item_int_send(self.ts, self.tc, seq, frame, cmd, 0, 1, 0, 0, 0, 0,
+                                int(lat * 1e7), int(lon * 1e7), alt)
+
     def _send(self, fn: Callable[[Any], None], *, detail: str = "", log: bool = True) -> None:
         if (self._hands_off and log) or self._dead:
             return   # somebody else is in charge: no commands at all
@@ -222,9 +228,7 @@ class MavlinkLink:
                     continue
                 cmd, (lat, lon), alt = items[seq]
                 frame = mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT if seq else mav.MAV_FRAME_GLOBAL_INT
-                self._send(lambda m, s=seq, c=cmd, la=lat, lo=lon, z=alt, f=frame:
-                           m.mission_item_int_send(self.ts, self.tc, s, f, c, 0, 1, 0, 0, 0, 0,
-                                                   int(la * 1e7), int(lo * 1e7), z),
+                self._send(functools.partial(self._mission_item, seq, frame, cmd, lat, lon, alt),
                            detail=f"mission_item {seq}")
                 sent.add(seq)
             refused = [a for a in self._mission_acks if a != mav.MAV_MISSION_ACCEPTED]

@@ -14,6 +14,7 @@ Contract:
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -21,8 +22,26 @@ from typing import Any
 Node = Any  # a dd BDD node (dd.cudd.Function or dd.autoref.Function)
 Manager = Any
 
+
+def _import_dd_cudd() -> Any:
+    """``dd.cudd``, imported without networkx: ``dd._utils`` imports networkx (optional, for
+    graph export, which iterplan never uses) and that import is 0.1-0.3 s of every ``iterc``
+    run that synthesises.  A ``None`` entry in ``sys.modules`` makes dd's ``import networkx``
+    fail, which dd handles; the entry is removed again, so later imports of networkx work."""
+    blocked = "networkx" not in sys.modules
+    if blocked:
+        sys.modules["networkx"] = None  # type: ignore[assignment]
+    try:
+        import dd.cudd
+
+        return dd.cudd
+    finally:
+        if blocked:
+            del sys.modules["networkx"]
+
+
 try:  # pragma: no cover - which branch runs depends on the installation
-    import dd.cudd as _cudd
+    _cudd = _import_dd_cudd()
 
     BACKEND = "cudd"
 except ImportError:  # pragma: no cover
@@ -62,6 +81,16 @@ def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
     if _cudd is not None and backend_of(bdd) == "cudd":
         return _cudd.and_exists(u, v, qv)
     return bdd.exist(qv, u & v)
+
+
+def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+    """``∀ qvars. u ∨ v`` — CUDD's fused operator when available (dual of :func:`and_exists`)."""
+    qv = set(qvars)
+    if not qv:
+        return u | v
+    if _cudd is not None and backend_of(bdd) == "cudd":
+        return _cudd.or_forall(u, v, qv)
+    return bdd.forall(qv, u | v)
 
 
 def bits_for(n: int) -> int:

@@ -9,9 +9,10 @@ explain (:mod:`explain`).
 
 from __future__ import annotations
 
+import enum
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from iterplan_compiler.diagnostics import Diagnostic, error
@@ -32,10 +33,107 @@ from iterplan_compiler.synthesis.strategy import (
     nonblocking_region,
 )
 
-SOLVERS = ("symbolic", "explicit")
+
+class _StrEnum(str, enum.Enum):
+    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self.value), spec)
+
+class Solver(_StrEnum):
+    """Which GR(1) solver :func:`synthesize` runs (both give the same verdict and controller)."""
+
+    SYMBOLIC = "symbolic"  # BDD fixpoint (default)
+    EXPLICIT = "explicit"  # MTSA's explicit rank solver
 
 
-@dataclass
+class VariableOrder(_StrEnum):
+    """BDD variable orders of the symbolic solver (see :mod:`game`)."""
+
+    CLUSTERED = "clustered"
+    ACTION_FIRST = "action_first"
+    ACTION_LAST = "action_last"
+    BLOCKED = "blocked"
+
+
+SOLVERS = tuple(s.value for s in Solver)
+
+StatValue = int | float | str
+
+
+@dataclass(frozen=True)
+class SynthesisStats(Mapping[str, object]):
+    """Sizes and per-phase times of one :func:`synthesize` run.
+
+    Typed fields for what every run reports (None: not measured by this solver); ``times`` are
+    the phases in the order they ran (``prepare``, ``encode``/``build``, ``reach``, ``solve``,
+    ``extract``), ``extra`` anything else an engine reported.  The mapping view (``st["t_solve"]``,
+    ``"mode" in st``) serves the reports and benchmarks written against the former dict.
+    """
+
+    solver: Solver
+    mode: str | None = None
+    warnings: tuple[str, ...] = ()
+    precondition: str | None = None
+    game_states: int | None = None
+    game_transitions: int | None = None
+    winning_states: int | None = None
+    controller_states: int | None = None
+    controller_transitions: int | None = None
+    composition_states: int | None = None
+    bdd_vars: int | None = None
+    trans_bdd_nodes: int | None = None
+    winning_bdd_nodes: int | None = None
+    peak_bdd_nodes: int | None = None
+    fixpoint_iterations: int | None = None
+    bdd_backend: str | None = None
+    order: str | None = None
+    times: tuple[tuple[str, float], ...] = ()
+    extra: tuple[tuple[str, object], ...] = ()
+
+    @classmethod
+    def from_dict(cls, raw: Mapping[str, Any]) -> SynthesisStats:
+        """The typed record of the dict the engines fill in while solving."""
+        names = {f.name for f in fields(cls)} - {"times", "extra", "solver", "warnings"}
+        known = {k: v for k, v in raw.items() if k in names}
+        times = tuple((k[2:], float(v)) for k, v in raw.items() if k.startswith("t_"))
+        extra = tuple((k, v) for k, v in raw.items()
+                      if k not in names and not k.startswith("t_")
+                      and k not in ("solver", "warnings"))
+        return cls(Solver(raw.get("solver", Solver.SYMBOLIC)),
+                   warnings=tuple(str(w) for w in raw.get("warnings", ())),
+                   times=times, extra=extra, **known)
+
+    def _items(self) -> dict[str, object]:
+        out: dict[str, object] = {"solver": self.solver.value}
+        for f in fields(self):
+            if f.name in ("solver", "times", "extra"):
+                continue
+            v = getattr(self, f.name)
+            if v is not None and not (f.name == "warnings" and not v and self.mode is None):
+                out[f.name] = list(v) if f.name == "warnings" else v
+        out.update((f"t_{k}", v) for k, v in self.times)
+        out.update(self.extra)
+        return out
+
+    def __getitem__(self, key: str) -> object:
+        return self._items()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items())
+
+    def __len__(self) -> int:
+        return len(self._items())
+
+    def seconds(self, phase: str) -> float:
+        """Seconds spent in ``phase`` (0.0 when it did not run)."""
+        return dict(self.times).get(phase, 0.0)
+
+
+@dataclass(frozen=True)
 class SynthesisResult:
     """Outcome of :func:`synthesize`.
 
@@ -50,7 +148,7 @@ class SynthesisResult:
     controller: LTS | None
     composition: LTS | None
     explanation: str
-    stats: dict[str, Any] = field(default_factory=dict)
+    stats: SynthesisStats = field(default_factory=lambda: SynthesisStats(Solver.SYMBOLIC))
     diagnostics: tuple[Diagnostic, ...] = ()
 
 
@@ -65,12 +163,12 @@ def _minimise(lts: LTS) -> LTS:
 def synthesize(
     problem: SynthesisProblem,
     *,
-    solver: str = "symbolic",
+    solver: Solver | str = Solver.SYMBOLIC,
     progress: Callable[[str], None] | None = None,
     explain: bool = True,
     minimise: bool = True,
     max_states: int | None = 2_000_000,
-    order: str = "clustered",
+    order: VariableOrder | str = VariableOrder.CLUSTERED,
 ) -> SynthesisResult:
     """Solve ``problem`` (§3) and build its controller; never raises for bad specs.
 
@@ -81,40 +179,58 @@ def synthesize(
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVERS}")
-    stats: dict[str, Any] = {"solver": solver}
+    stats: dict[str, Any] = {"solver": Solver(solver)}
+    result = _synthesize(problem, Solver(solver), progress, explain, minimise, max_states,
+                         VariableOrder(order), stats)
+    return SynthesisResult(result.realizable, result.controller, result.composition,
+                           result.explanation, SynthesisStats.from_dict(stats),
+                           result.diagnostics)
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    realizable: bool
+    controller: LTS | None
+    composition: LTS | None
+    explanation: str
+    diagnostics: tuple[Diagnostic, ...] = ()
+
+
+def _synthesize(problem: SynthesisProblem, solver: Solver,
+                progress: Callable[[str], None] | None, explain: bool, minimise: bool,
+                max_states: int | None, order: VariableOrder, stats: dict[str, Any]
+                ) -> _Outcome:
     say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
     try:
         spec = prepare(problem)
     except SynthesisError as e:
-        return SynthesisResult(False, None, None, e.message, stats,
-                               (error(e.code, e.message, problem.span),))
+        return _Outcome(False, None, None, e.message, (error(e.code, e.message, problem.span),))
     except PreconditionFailure as e:
         # MTSA prints the message and leaves no composition: the verdict is "no controller"
         stats["precondition"] = str(e)
-        return SynthesisResult(False, None, None,
-                               f"unrealizable: heuristic synthesis refused the problem: {e}",
-                               stats)
+        return _Outcome(False, None, None,
+                        f"unrealizable: heuristic synthesis refused the problem: {e}")
     stats["mode"] = spec.mode
     stats["warnings"] = list(spec.warnings)
     stats["t_prepare"] = time.perf_counter() - t0
     name = problem.name
     try:
         # §3.6 `permissive`: both solvers end in strategy.extract_controller
-        if solver == "explicit":
+        if solver is Solver.EXPLICIT:
             result = _solve_explicit(spec, stats, say, max_states, explain, name,
                                      permissive=problem.permissive)
         else:
             from iterplan_compiler.synthesis.game import solve_symbolic
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
-                                    order=order, permissive=problem.permissive)
+                                    order=order.value, permissive=problem.permissive)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
-        return SynthesisResult(False, None, None, msg, stats, (error("S003", msg, problem.span),))
+        return _Outcome(False, None, None, msg, (error("E0908", msg, problem.span),))
     realizable, controller, explanation = result
     if not realizable or controller is None:
-        return SynthesisResult(False, None, None, explanation, stats)
+        return _Outcome(False, None, None, explanation)
     t1 = time.perf_counter()
     if minimise:
         controller = _minimise(controller)
@@ -131,7 +247,7 @@ def synthesize(
     composition = _compose([controller, *others], name) if others else renamed(controller, name)
     stats["composition_states"] = composition.num_states
     stats["t_extract"] = stats.get("t_extract", 0.0) + time.perf_counter() - t1
-    return SynthesisResult(True, controller, composition, "", stats)
+    return _Outcome(True, controller, composition, "")
 
 
 def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
@@ -175,9 +291,10 @@ def _fluent_only_actions(spec: GameSpec) -> frozenset[str]:
 
 def _explain(spec: GameSpec, game: _explicit.ExplicitGame, win: frozenset[int],
              explain: bool) -> str:
+    from iterplan_compiler.synthesis.explain import explain_losing, losing_count, losing_head
+
     if not explain:
-        return "unrealizable: the initial state is not winning"
-    from iterplan_compiler.synthesis.explain import explain_losing
+        return losing_head(*losing_count(game, win))
 
     try:
         return explain_losing(spec, game, win)
@@ -185,7 +302,7 @@ def _explain(spec: GameSpec, game: _explicit.ExplicitGame, win: frozenset[int],
         return f"unrealizable: the initial state is not winning (no trace: {exc})"
 
 
-def check_compatibility(problem: SynthesisProblem, *, solver: str = "symbolic"
+def check_compatibility(problem: SynthesisProblem, *, solver: Solver | str = Solver.SYMBOLIC
                         ) -> tuple[bool, str]:
     """MTSA's ``checkCompatibility`` (§3.11): are the assumptions compatible with the plant?
 

@@ -129,7 +129,7 @@ def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
             return f
         if isinstance(f, FluentProp):
             if f.name not in by_name:
-                raise SynthesisError("S001", f"unknown fluent {f.name!r} in a goal")
+                raise SynthesisError("E0906", f"unknown fluent {f.name!r} in a goal")
             used[f.name] = by_name[f.name]
             return f
         if isinstance(f, ActionProp):
@@ -141,7 +141,7 @@ def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
         if isinstance(f, And | Or | Implies | Iff):
             return type(f)(convert(f.left), convert(f.right))
         raise SynthesisError(
-            "S002", f"goal formula must be propositional (no X, U, W, [], <>): {f!r}")
+            "E0907", f"goal formula must be propositional (no X, U, W, [], <>): {f!r}")
 
     if mode == "nonblocking":
         marking = frozenset(problem.marking or ()) & plant_alpha

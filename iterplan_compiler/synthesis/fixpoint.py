@@ -1,72 +1,136 @@
-"""Generic three-nested GR(1) fixpoint over a ``dd`` BDD manager.
+"""The GR(1) fixpoint engine: one three-nested fixpoint for every game of the project.
 
-API (stable; other packages — e.g. the GR(1) head-to-head of ``iterplan_compiler.gr1`` — reuse it)::
+Equation (Piterman–Pnueli–Sa'ar VMCAI'06; Bloem et al. JCSS'12), for assumptions
+``A_1..A_m`` and guarantees ``G_1..G_n``, in one of two goal kinds (:class:`GoalKind`)::
 
+    STATE       W = νZ. ∧_j μY. ∨_i νX. (G_j ∧ CPre(Z)) ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))
+    TRANSITION  W = νZ. ∧_j μY. ∨_i νX. CPreT((G_j ∧ Z') ∨ Y' ∨ (¬A_i ∧ X'))
+
+``CPre`` — the controllable predecessor of a *state* set — is the only game-specific part
+and comes from a typed predecessor object (:class:`Predecessor`): the MTSA game of
+``synthesis/symbolic_game.py`` (``iterc synth``) and slugs' Mealy game of ``gr1/game.py``
+(``iterc solve``) both provide ``cpre``; transition goals (slugs' liveness lines that
+mention primed variables) need a :class:`TransitionPredecessor` (``prime`` + ``CPreT`` of a
+transition-level target).
+
+API::
+
+    solve_gr1(bdd, pre, assumptions, guarantees, *, goals=GoalKind.STATE, care=None,
+              keep_iterates=False, lost=None, options=EngineOptions(), progress=None)
+        -> Gr1Fixpoint
     gr1_winning(bdd, cpre, assumptions, guarantees, *, care=None, keep_iterates=False,
-                must_contain=None, progress=None) -> Gr1Fixpoint
+                must_contain=None, progress=None, memo=True)        # callable-cpre form
 
-computes the winning region of the game whose controllable predecessor operator is ``cpre``::
+* an empty ``assumptions``/``guarantees`` sequence means one set ``TRUE``;
+* ``care`` — the universe (valid encodings ∧ reachable states): ``Z`` starts there;
+* ``lost(Z)`` — early termination, must be *monotone* (true for ``Z`` ⇒ true for every
+  subset): ``Z`` only shrinks, so once it holds the answer is final and the engine stops
+  with ``complete = False`` (slugs: the initial condition fails; MTSA: the initial state
+  left ``Z``);
+* ``keep_iterates`` — also return, for the final ``Z``, the cumulative ``μY`` layers
+  ``y_layers[j][r]`` and the ``νX`` sets ``x_sets[j][r][i]`` that strategy extraction needs
+  (Bloem et al. 2012, §5).
 
-    W = νZ. ∧_j μY. ∨_i νX. (G_j ∧ CPre(Z)) ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))
+Optimisations (each sound by monotonicity of the operators; switches in
+:class:`EngineOptions` so they can be measured):
 
-* ``cpre(T)`` — any monotone function from a state set (a BDD over *current*-state variables)
-  to a state set: the states from which the controller can force the next state into ``T``.
-  Game-specific rules (who owns a state, dead ends losing, ...) live entirely in ``cpre``.
-* ``assumptions`` ``A_1..A_m`` / ``guarantees`` ``G_1..G_n`` — state sets; an empty sequence
-  means one set ``TRUE`` (so an empty guarantee list is pure safety/deadlock avoidance).
-* ``care`` — the universe (e.g. valid encodings ∧ reachable states); ``Z`` starts there and
-  every result is a subset of it.
-* ``must_contain`` — early termination: ``Z`` only shrinks, so as soon as ``Z ∧ must_contain``
-  is empty (typically: the initial state was lost) the result is final for that question and
-  the computation stops with ``Gr1Fixpoint.complete = False``.
-* ``keep_iterates`` — also return, for the final ``Z``, the ``μY`` layers (``y_layers[j][r]``,
-  cumulative: ``y_layers[j][0]`` is the first iterate) and the ``νX`` sets
-  (``x_sets[j][r][i]``) needed to extract a memoryful strategy (Bloem et al. 2012, §5).
-
-Optimisations (all sound by monotonicity):
-
-* all iterates are intersected with the current ``Z`` (and so with ``care``): the greatest
-  fixpoint is unchanged (see ``_mu_y``) and the BDDs carry no junk outside ``Z``;
-
-* *fixpoint recycling* — during the outer ``νZ`` iteration ``Z`` decreases, so the ``r``-th
-  ``μY`` iterate and every ``νX`` value decrease too; the ``νX`` for ``(j, r, i)`` therefore
-  starts from its value in the previous ``Z`` round (intersected with ``Z``) instead of ``Z``.
-* the ``μY`` loop stops as soon as ``Y == Z`` (it cannot grow beyond ``Z``); the ``νZ`` loop
-  stops on ``must_contain``.
+* *restriction to Z* — every iterate is intersected with the current ``Z``: the winning
+  region is a fixpoint of the restricted operator, which is below the unrestricted one, so
+  the greatest fixpoint is unchanged while the BDDs carry no junk outside ``Z``.
+* *feedback with early fixpoint detection* (Firman–Maoz–Ringert 2020) — ``Z`` is replaced
+  by ``Y_j`` right after goal ``j`` (``Y_j ⊆ Z``: same greatest fixpoint, faster
+  convergence); goals are visited cyclically and the engine stops as soon as ``n``
+  consecutive goals left ``Z`` unchanged (each then saw the final ``Z``, so their stored
+  iterates are the strategy data).  ``feedback=False``: classic passes
+  ``Z := ∧_j Y_j(Z)``.
+* *warm start / fixpoint recycling* (slugs' ``--fixedPointRecycling``) — ``Z`` decreases
+  from one visit of goal ``j`` to the next, so the ``r``-th ``μY`` iterate and every ``νX``
+  value decrease too: the ``νX`` for ``(j, r, i)`` may start from its previous value
+  (∧ ``Z``) instead of from ``Z``.  Fewer ``X`` steps, but every ``X`` set stays alive: on
+  the slugs families it raised peak live nodes 15× (arbiter n=40) and lost, on the MTSA
+  games it wins — hence a switch.
 * *chained* ``μY`` (Gauss–Seidel; only without ``keep_iterates``) — inside one ``μY`` round
-  the ``νX`` for assumption ``i`` already uses ``CPre(Y ∪ X_1 ∪ … ∪ X_{i-1})`` in its base
-  instead of waiting for the next round.  Every chained iterate stays below the least
-  fixpoint (each is an operator application to a subset of it) and a round without change is
-  a fixpoint, so ``μY`` is the same set — reached in far fewer rounds (DoorPatrol N=7: 831
-  instead of 3 612 ``νX`` steps, 4.6× less time).  The layered iterates that strategy
-  extraction needs (Bloem et al.) only exist for the round-wise (Jacobi) order, so
-  ``keep_iterates=True`` keeps that order.
-* ``cpre`` results are memoised per argument node for the duration of one call (``CPre(Z)``
-  is the first ``νX`` step for every ``(r, i)``; canonical BDD nodes make the cache exact).
-  Pass ``memo=False`` if ``cpre`` is not a pure function of its argument.
-
-Sets are plain ``dd`` nodes; equality tests are O(1) on canonical BDDs.
+  the ``νX`` for assumption ``i`` already uses the ``Y`` grown by ``X_1 … X_{i-1}``.  Every
+  chained iterate stays below the least fixpoint and a round without change is a fixpoint,
+  so ``μY`` is the same set, in fewer rounds (DoorPatrol N=7: 831 instead of 3 612 ``νX``
+  steps).  The layers strategy extraction needs exist only for the round-wise (Jacobi)
+  order, so ``keep_iterates=True`` uses that order.
+* *trivial assumptions* — for ``A_i = TRUE`` the ``νX`` body does not depend on ``X``:
+  one evaluation, no ``CPre(X)`` (halves the ``CPre`` calls on the lift).
+* *memoised CPre* — ``CPre(Z)`` is the first ``νX`` step for every ``(r, i)`` and
+  ``CPre(∅)`` the first ``Y`` base; canonical BDD nodes make a cache keyed by node exact.
+  ``memo`` bounds it (least recently used out): an unbounded cache keeps every argument
+  alive, which makes CUDD's sifting dearer on the slugs families.
 """
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from enum import Enum
+from typing import Any, Protocol, runtime_checkable
 
 from iterplan_compiler import limits
 
-Node = Any
+Node = Any  # a dd BDD node (dd.cudd.Function or dd.autoref.Function)
+
+
+class GoalKind(Enum):
+    """Whether assumptions/guarantees are state predicates or may mention next-state
+    variables (slugs' primed liveness lines)."""
+
+    STATE = "state"
+    TRANSITION = "transition"
+
+
+@runtime_checkable
+class Predecessor(Protocol):
+    """A game, seen by the engine: the controllable predecessor of a state set."""
+
+    def cpre(self, states: Node) -> Node:
+        """States from which the controller can force the next state into ``states``."""
+        ...
+
+
+@runtime_checkable
+class TransitionPredecessor(Predecessor, Protocol):
+    """A game that also supports transition-level targets (needed by ``GoalKind.TRANSITION``)."""
+
+    def prime(self, states: Node) -> Node:
+        """The next-state copy of a state set."""
+        ...
+
+    def cpre_trans(self, target: Node) -> Node:
+        """States from which the controller can force the next *transition* into ``target``."""
+        ...
+
+
+@dataclass(frozen=True)
+class EngineOptions:
+    """Switches of the optimisations in the module docstring (all keep the result exact).
+
+    ``memo``: CPre cache size (``None`` unbounded, ``0`` off)."""
+
+    feedback: bool = True
+    recycle: bool = True
+    chained: bool = True
+    memo: int | None = None
+
+
+#: the slugs head-to-head defaults (measured on ``benchmarks/gr1/run.py``, see docs/gr1.md)
+SLUGS_OPTIONS = EngineOptions(feedback=True, recycle=False, chained=False, memo=8)
 
 
 @dataclass
 class Gr1Fixpoint:
-    """Result of :func:`gr1_winning`.
+    """Result of the engine.
 
-    ``winning`` — the winning region (``Z``); ``y_layers[j]`` — cumulative ``μY`` iterates for
-    guarantee ``j`` (empty lists unless ``keep_iterates``); ``x_sets[j][r][i]`` — the ``νX``
-    value for guarantee ``j``, layer ``r``, assumption ``i``; ``complete`` — False when
-    stopped early by ``must_contain``; ``iterations`` — counts of Z / Y / X rounds.
+    ``winning`` — ``Z`` (exact when ``complete``; when ``lost`` fired, a superset of the
+    winning region on which ``lost`` holds); ``y_layers[j]`` — cumulative ``μY`` iterates
+    of goal ``j``; ``x_sets[j][r][i]`` — the ``νX`` values (both empty unless
+    ``keep_iterates``); ``iterations`` — counts of ``z`` passes, ``goals`` visits, ``y``
+    and ``x`` steps.
     """
 
     winning: Node
@@ -74,6 +138,281 @@ class Gr1Fixpoint:
     x_sets: list[list[list[Node]]] = field(default_factory=list)
     complete: bool = True
     iterations: dict[str, int] = field(default_factory=dict)
+
+
+class _Memo:
+    """``CPre`` with a cache keyed by BDD node (LRU-bounded unless ``size`` is None)."""
+
+    def __init__(self, cpre: Callable[[Node], Node], size: int | None) -> None:
+        self.raw = cpre
+        self.size = size
+        self.cache: OrderedDict[Node, Node] = OrderedDict()
+
+    def __call__(self, u: Node) -> Node:
+        if self.size == 0:
+            return self.raw(u)
+        r = self.cache.get(u)
+        if r is not None:
+            self.cache.move_to_end(u)
+            return r
+        r = self.cache[u] = self.raw(u)
+        if self.size is not None and len(self.cache) > self.size:
+            self.cache.popitem(last=False)
+        return r
+
+
+class _StateOp:
+    """The STATE-kind operator: ``νX. goal ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))``, inside ``Z``."""
+
+    def __init__(self, bdd: Any, cpre: Callable[[Node], Node]) -> None:
+        self.bdd, self.cpre = bdd, cpre
+
+    def goal(self, g: Node, Z: Node) -> Node:
+        return g & self.cpre(Z)
+
+    def base(self, goal: Node, Y: Node, Z: Node) -> Node:
+        # not restricted to Z: every νX step is intersected with its start ⊆ Z anyway
+        return goal | self.cpre(Y)
+
+    def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
+        if not_a == self.bdd.false:
+            return base
+        return base | (not_a & self.cpre(X))
+
+    def floor(self, base: Node, Z: Node) -> Node:
+        """A state set inside ``Z`` that every ``νX`` value contains."""
+        return base & Z
+
+
+class _TransitionOp:
+    """The TRANSITION-kind operator: ``νX. CPreT((G ∧ Z') ∨ Y' ∨ (¬A_i ∧ X'))``."""
+
+    def __init__(self, bdd: Any, pre: TransitionPredecessor) -> None:
+        self.bdd, self.pre = bdd, pre
+
+    def goal(self, g: Node, Z: Node) -> Node:
+        return g & self.pre.prime(Z)
+
+    def base(self, goal: Node, Y: Node, Z: Node) -> Node:
+        return goal | self.pre.prime(Y)
+
+    def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
+        if not_a == self.bdd.false:
+            return self.pre.cpre_trans(base)
+        return self.pre.cpre_trans(base | (not_a & self.pre.prime(X)))
+
+    def floor(self, base: Node, Z: Node) -> Node:
+        """A state set inside ``Z`` that every ``νX`` value contains (``base`` is
+        transition-level here, so: none)."""
+        return self.bdd.false
+
+
+_Op = _StateOp | _TransitionOp
+
+
+@dataclass
+class _Goal:
+    """Per-goal state kept across visits: recycled ``νX`` values and the last iterates."""
+
+    g: Node
+    recycled: list[list[Node]] = field(default_factory=list)
+    layers: list[Node] = field(default_factory=list)
+    x_layers: list[list[Node]] = field(default_factory=list)
+
+
+def solve_gr1(
+    bdd: Any,
+    pre: Predecessor,
+    assumptions: Sequence[Node],
+    guarantees: Sequence[Node],
+    *,
+    goals: GoalKind = GoalKind.STATE,
+    care: Node | None = None,
+    keep_iterates: bool = False,
+    lost: Callable[[Node], bool] | None = None,
+    options: EngineOptions = EngineOptions(),
+    progress: Callable[[str], None] | None = None,
+) -> Gr1Fixpoint:
+    """Winning region of ``(∧_i GF A_i) → (∧_j GF G_j)`` for ``pre``; see the module doc."""
+    top = bdd.true if care is None else care
+    op = _operator(bdd, pre, goals, options)
+    not_a = [~a for a in (list(assumptions) or [bdd.true])]
+    states = [_Goal(g if goals is GoalKind.TRANSITION else g & top)
+              for g in (list(guarantees) or [bdd.true])]
+    stats = {"z": 0, "goals": 0, "y": 0, "x": 0}
+    run = _feedback_passes if options.feedback else _classic_passes
+    Z, complete = run(bdd, op, not_a, states, top, keep_iterates, lost, options, stats, progress)
+    if not (keep_iterates and complete):
+        return Gr1Fixpoint(Z, [], [], complete, stats)
+    return Gr1Fixpoint(Z, [s.layers for s in states], [s.x_layers for s in states], True,
+                       stats)
+
+
+def _operator(bdd: Any, pre: Predecessor, goals: GoalKind, options: EngineOptions) -> _Op:
+    if goals is GoalKind.TRANSITION:
+        if not isinstance(pre, TransitionPredecessor):
+            raise TypeError("transition goals need a TransitionPredecessor (prime, cpre_trans)")
+        return _TransitionOp(bdd, pre)
+    return _StateOp(bdd, _Memo(pre.cpre, options.memo))
+
+
+def _feedback_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
+                     keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
+                     stats: dict[str, int], progress: Callable[[str], None] | None
+                     ) -> tuple[Node, bool]:
+    """Goals cyclically, ``Z := Y_j`` after each; stop after ``n`` unchanged visits."""
+    n = len(states)
+    unchanged = 0
+    j = 0
+    while unchanged < n:
+        limits.check_deadline()  # --time-limit inside the fixpoint
+        Y = _visit(bdd, op, not_a, states[j], Z, keep, options, stats)
+        if Y == Z:
+            unchanged += 1
+        else:
+            unchanged = 0
+            Z = Y
+            if lost is not None and lost(Z):
+                stats["z"] += 1
+                if progress:
+                    progress(f"gr1: early stop after {stats['goals']} goal visits")
+                return Z, False
+        j = (j + 1) % n
+        if j == 0:
+            stats["z"] += 1
+            if progress:
+                progress(f"gr1: Z-iteration {stats['z']}: |Z| nodes = {len(Z)}")
+    if j != 0:
+        stats["z"] += 1
+    return Z, True
+
+
+def _classic_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
+                    keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
+                    stats: dict[str, int], progress: Callable[[str], None] | None
+                    ) -> tuple[Node, bool]:
+    """``Z := ∧_j Y_j(Z)`` with every ``Y_j`` computed from the same ``Z``, until stable."""
+    while True:
+        limits.check_deadline()
+        stats["z"] += 1
+        z_new = bdd.true
+        for s in states:
+            z_new &= _visit(bdd, op, not_a, s, Z, keep, options, stats)
+        if progress:
+            progress(f"gr1: Z-iteration {stats['z']}: |Z| nodes = {len(z_new)}")
+        if z_new == Z:
+            return Z, True
+        Z = z_new
+        if lost is not None and lost(Z):
+            return Z, False
+
+
+def _visit(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, keep: bool,
+           options: EngineOptions, stats: dict[str, int]) -> Node:
+    """One ``μY`` for goal ``s`` against ``Z``; updates its recycled values / iterates."""
+    stats["goals"] += 1
+    if options.chained and not keep:
+        x_rounds, Y = _mu_y_chained(bdd, op, not_a, s, Z, options.recycle, stats)
+        layers: list[Node] = []
+    else:
+        layers, x_rounds, Y = _mu_y(bdd, op, not_a, s, Z, options.recycle, stats)
+    if options.recycle:
+        s.recycled = x_rounds
+    if keep:
+        s.layers, s.x_layers = layers, x_rounds
+    return Y
+
+
+def _start(op: _Op, s: _Goal, r: int, i: int, Z: Node, base: Node, recycle: bool) -> Node:
+    """Where ``νX`` for ``(r, i)`` starts: ``Z``, or its recycled value from the last visit
+    (∧ ``Z``, ∨ the part of ``base`` in ``Z``, which the fixpoint contains anyway)."""
+    if recycle and r < len(s.recycled) and i < len(s.recycled[r]):
+        return (s.recycled[r][i] & Z) | op.floor(base, Z)
+    return Z
+
+
+def _mu_y(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
+          stats: dict[str, int]) -> tuple[list[Node], list[list[Node]], Node]:
+    """Round-wise (Jacobi) ``μY``: ``(layers, x_layers, Y)``."""
+    goal = op.goal(s.g, Z)
+    Y = bdd.false
+    layers: list[Node] = []
+    x_layers: list[list[Node]] = []
+    while True:
+        limits.check_deadline()
+        stats["y"] += 1
+        base = op.base(goal, Y, Z)
+        xs = [_nu_x(bdd, op, base, not_a[i],
+                    _start(op, s, len(layers), i, Z, base, recycle), stats)
+              for i in range(len(not_a))]
+        y_new = bdd.false
+        for X in xs:
+            y_new |= X
+        y_new &= Z
+        if y_new == Y:
+            return layers, x_layers, Y
+        Y = y_new
+        layers.append(Y)
+        x_layers.append(xs)
+        if Y == Z:  # cannot grow further
+            return layers, x_layers, Y
+
+
+def _mu_y_chained(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
+                  stats: dict[str, int]) -> tuple[list[list[Node]], Node]:
+    """Gauss–Seidel ``μY`` (module doc): ``Y`` grows after every ``νX``; ``(x_rounds, Y)``."""
+    goal = op.goal(s.g, Z)
+    Y = bdd.false
+    x_rounds: list[list[Node]] = []
+    quiet = 0  # consecutive νX steps that did not grow Y
+    while True:
+        limits.check_deadline()
+        stats["y"] += 1
+        xs: list[Node] = []
+        x_rounds.append(xs)
+        for i in range(len(not_a)):
+            base = op.base(goal, Y, Z)
+            X = _nu_x(bdd, op, base, not_a[i],
+                      _start(op, s, len(x_rounds) - 1, i, Z, base, recycle), stats)
+            xs.append(X)
+            y_new = (Y | X) & Z
+            quiet = quiet + 1 if y_new == Y else 0
+            Y = y_new
+            # Y == Z cannot grow; after len(not_a) quiet steps every νX was evaluated against
+            # the current Y and stayed inside it: Y is the fixpoint.
+            if Y == Z or quiet == len(not_a):
+                return x_rounds, Y
+
+
+def _nu_x(bdd: Any, op: _Op, base: Node, not_a: Node, start: Node,
+          stats: dict[str, int]) -> Node:
+    """``νX. step(X)`` from ``start`` (an over-approximation), descending inside ``start``.
+
+    ``X_{k+1} = step(X_k) ∧ start ⊆ X_k`` by monotonicity, so the first repetition (or
+    ``∅``) is the fixpoint; for ``¬A_i = ∅`` the step ignores ``X``: one evaluation.
+    """
+    stats["x"] += 1
+    X = op.x_step(base, not_a, start) & start
+    if not_a == bdd.false:
+        return X
+    while X != bdd.false:
+        limits.check_deadline()
+        stats["x"] += 1
+        x_new = op.x_step(base, not_a, X) & start
+        if x_new == X:
+            break
+        X = x_new
+    return X
+
+
+class _CallablePre:
+    """A plain ``cpre`` function as a :class:`Predecessor`."""
+
+    def __init__(self, cpre: Callable[[Node], Node]) -> None:
+        self._cpre = cpre
+
+    def cpre(self, states: Node) -> Node:
+        return self._cpre(states)
 
 
 def gr1_winning(
@@ -88,153 +427,16 @@ def gr1_winning(
     progress: Callable[[str], None] | None = None,
     memo: bool = True,
 ) -> Gr1Fixpoint:
-    """Winning region of the GR(1) game ``(∧_i GF A_i) → (∧_j GF G_j)``; see the module doc."""
-    if memo:
-        raw_cpre = cpre
-        cache: dict[Node, Node] = {}
+    """:func:`solve_gr1` with a ``cpre`` function, state goals and the MTSA defaults
+    (recycling, chained ``μY``, unbounded memo); ``must_contain`` — stop once
+    ``Z ∧ must_contain = ∅``.  ``memo=False`` if ``cpre`` is not a pure function."""
+    lost = None
+    if must_contain is not None:
+        mc = must_contain
 
-        def cpre(X: Node) -> Node:
-            r = cache.get(X)
-            if r is None:
-                r = cache[X] = raw_cpre(X)
-            return r
+        def lost(Z: Node) -> bool:
+            return bool((Z & mc) == bdd.false)
 
-    top = bdd.true if care is None else care
-    A = list(assumptions) or [bdd.true]
-    G = list(guarantees) or [bdd.true]
-    stats = {"z": 0, "y": 0, "x": 0}
-    # recycled νX values from the previous Z round: prev_x[j][r][i]
-    prev_x: list[list[list[Node]]] = [[] for _ in G]
-
-    Z = top
-    while True:
-        limits.check_deadline()  # --time-limit inside the fixpoint
-        stats["z"] += 1
-        z_round_start = Z
-        round_y: list[list[Node]] = []
-        round_x: list[list[list[Node]]] = []
-        for j, g in enumerate(G):
-            mu_y = _mu_y if keep_iterates else _mu_y_chained
-            y_layers, x_layers, Y = mu_y(bdd, cpre, A, g & top, Z, prev_x[j], stats)
-            prev_x[j] = x_layers
-            round_y.append(y_layers)
-            round_x.append(x_layers)
-            # Z := Z ∧ Y_j (Y_j ⊆ Z anyway); shrinking Z between guarantees only speeds up
-            # convergence, the greatest fixpoint is the same.
-            Z = Y
-            if must_contain is not None and (Z & must_contain) == bdd.false:
-                if progress:
-                    progress(f"gr1: early stop after {stats['z']} Z-iterations")
-                return Gr1Fixpoint(Z, [], [], False, stats)
-        if progress:
-            progress(f"gr1: Z-iteration {stats['z']}: |Z| nodes = {len(Z)}")
-        if Z == z_round_start:
-            break
-    if not keep_iterates:
-        return Gr1Fixpoint(Z, [], [], True, stats)
-    # In the last round Z did not change, so every guarantee's iterates were computed against
-    # the final Z: they are exactly the strategy data.
-    return Gr1Fixpoint(Z, round_y, round_x, True, stats)
-
-
-def _mu_y(
-    bdd: Any,
-    cpre: Callable[[Node], Node],
-    A: list[Node],
-    g: Node,
-    Z: Node,
-    recycled: list[list[Node]],
-    stats: dict[str, int],
-) -> tuple[list[Node], list[list[Node]], Node]:
-    """``μY. ∨_i νX. (g ∧ CPre(Z)) ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))`` with its iterates."""
-    # Every iterate is kept inside Z: the winning region is a fixpoint of the restricted
-    # operator too (winning strategies never leave it), and the restricted operator is below
-    # the unrestricted one, so the greatest fixpoint is unchanged — while the BDDs stay free
-    # of junk outside Z (unreachable or already-lost states).
-    reach_goal = g & cpre(Z) & Z
-    Y = bdd.false
-    layers: list[Node] = []
-    x_layers: list[list[Node]] = []
-    r = 0
-    while True:
-        limits.check_deadline()  # --time-limit inside the fixpoint
-        stats["y"] += 1
-        base = reach_goal | (cpre(Y) & Z)
-        y_new = bdd.false
-        xs: list[Node] = []
-        for i, a in enumerate(A):
-            start = Z
-            if r < len(recycled):
-                start = recycled[r][i] & Z
-            X = _nu_x(cpre, base, ~a & Z, start | base, stats)
-            xs.append(X)
-            y_new |= X
-        y_new &= Z
-        if y_new == Y:
-            break
-        Y = y_new
-        layers.append(Y)
-        x_layers.append(xs)
-        r += 1
-        if Y == Z:  # cannot grow further
-            break
-    return layers, x_layers, Y
-
-
-def _mu_y_chained(
-    bdd: Any,
-    cpre: Callable[[Node], Node],
-    A: list[Node],
-    g: Node,
-    Z: Node,
-    recycled: list[list[Node]],
-    stats: dict[str, int],
-) -> tuple[list[Node], list[list[Node]], Node]:
-    """:func:`_mu_y` in Gauss–Seidel order (module doc): ``Y`` grows after every ``νX``.
-
-    Returns ``([], x_rounds, Y)``: the per-round ``νX`` values (for recycling in the next ``Z``
-    round — chained iterates are monotone in ``Z`` too), no layers.
-    """
-    reach_goal = g & cpre(Z) & Z
-    not_a = [~a & Z for a in A]
-    Y = bdd.false
-    x_rounds: list[list[Node]] = []
-    r = 0
-    quiet = 0  # consecutive νX steps that did not grow Y
-    while True:
-        limits.check_deadline()  # --time-limit inside the fixpoint
-        stats["y"] += 1
-        xs: list[Node] = []
-        for i in range(len(A)):
-            base = reach_goal | (cpre(Y) & Z)
-            start = Z
-            if r < len(recycled) and i < len(recycled[r]):
-                start = recycled[r][i] & Z
-            X = _nu_x(cpre, base, not_a[i], start | base, stats)
-            xs.append(X)
-            y_new = Y | X
-            quiet = quiet + 1 if y_new == Y else 0
-            Y = y_new
-            # Y == Z cannot grow further; after len(A) quiet steps every νX has been
-            # evaluated against the current Y and stayed inside it: Y is the fixpoint
-            # (no need to finish the round or to repeat a whole confirming round).
-            if Y == Z or quiet == len(A):
-                x_rounds.append(xs)
-                return [], x_rounds, Y
-        x_rounds.append(xs)
-        r += 1
-
-
-def _nu_x(
-    cpre: Callable[[Node], Node], base: Node, not_a: Node, start: Node, stats: dict[str, int]
-) -> Node:
-    """``νX. base ∨ (not_a ∧ CPre(X))`` starting from ``start`` (an over-approximation)."""
-    X = start
-    while True:
-        limits.check_deadline()  # --time-limit inside the fixpoint
-        stats["x"] += 1
-        x_new = base | (not_a & cpre(X))
-        x_new &= start  # keeps the iteration descending from the recycled start
-        if x_new == X:
-            return X
-        X = x_new
+    return solve_gr1(bdd, _CallablePre(cpre), assumptions, guarantees, care=care,
+                     keep_iterates=keep_iterates, lost=lost, progress=progress,
+                     options=EngineOptions(memo=None if memo else 0))

@@ -20,7 +20,7 @@ from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
 from iterplan_compiler.synthesis.strategy import extract_director
-from iterplan_compiler.synthesis.symbolic_game import ORDERS, SymbolicGame
+from iterplan_compiler.synthesis.symbolic_game import ORDERS, SymbolicGame, quotient_leaves
 from iterplan_compiler.synthesis.symbolic_strategy import symbolic_controller
 
 __all__ = ["ORDERS", "SymbolicGame", "nonblocking_symbolic", "solve_symbolic", "subgame"]
@@ -28,6 +28,9 @@ __all__ = ["ORDERS", "SymbolicGame", "nonblocking_symbolic", "solve_symbolic", "
 #: reachability is abandoned (the fixpoint then runs over all valid states) once the reached
 #: set's BDD grows past this many nodes — see :meth:`SymbolicGame.reachable`
 REACH_MAX_NODES = 200_000
+#: games with more reachable states get no counter-strategy trace
+EXPLAIN_MAX_STATES = 50_000
+_TOO_LARGE = "\n(game too large for a counter-strategy trace; try a smaller instance)"
 
 
 def subgame(g: SymbolicGame, region: Any, *, limit: int | None = None) -> ExplicitGame:
@@ -111,9 +114,28 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
                    explain: bool, name: str, order: str = "clustered",
-                   permissive: bool = False) -> tuple[bool, LTS | None, str]:
-    """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why)."""
+                   permissive: bool = False, quotient: bool = True
+                   ) -> tuple[bool, LTS | None, str]:
+    """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
+
+    With ``quotient`` the body machines are first replaced by their bisimulation quotients
+    (:func:`symbolic_game.quotient_leaves`); an unrealizable game to be explained is then
+    solved again without, so the counter-strategy trace names the machines' own states."""
     t = time.perf_counter()
+    if quotient and spec.mode == "gr1":  # the director (§3.9) is ranked explicitly as is
+        qspec = quotient_leaves(spec)
+        if qspec is not spec:
+            stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
+            stats["body_quotient_states"] = [c.num_states
+                                             for c in qspec.components[:_nbody(spec)]]
+            ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
+                                           order=order, permissive=permissive,
+                                           quotient=False)
+            states = stats.get("game_states")
+            if ok or not explain:
+                return ok, ctrl, why
+            if not isinstance(states, int) or states > EXPLAIN_MAX_STATES:
+                return ok, ctrl, why + _TOO_LARGE  # no trace past the bound anyway
     g = SymbolicGame(spec, order=order)
     stats["bdd_backend"] = type(g.bdd).__module__
     stats["order"] = order
@@ -146,7 +168,11 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["winning_bdd_nodes"] = len(W)
     _peak(g, stats)
     if (g.init & W) == g.bdd.false:
-        return False, None, _explain_symbolic(g, care, W, explain)
+        if explain and not fp.complete:
+            # stopped early (must_contain): W is a superset of the winning region; the
+            # explanation's counts and play need the exact one (as the explicit solver has)
+            W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live).winning & care
+        return False, None, _explain_symbolic(g, care, W, explain, exact=explain or fp.complete)
     if reach is not None:
         stats["winning_states"] = g.count(W)
         _check_controller_bound(stats["winning_states"] * len(goals), name)
@@ -155,6 +181,10 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["t_extract"] = time.perf_counter() - t
     _peak(g, stats)
     return True, ctrl, ""
+
+
+def _nbody(spec: GameSpec) -> int:
+    return spec.num_plant + spec.num_safety
 
 
 def _peak(g: SymbolicGame, stats: dict[str, Any]) -> None:
@@ -201,17 +231,18 @@ def _solve_nonblocking(g: SymbolicGame, reach: Any, stats: dict[str, Any], expla
     return True, ctrl, ""
 
 
-def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool) -> str:
-    if g.reach is None:
-        head = "unrealizable: the initial state is losing (game too large to count states)"
+def _explain_symbolic(g: SymbolicGame, reach: Any, W: Any, explain: bool,
+                      exact: bool = True) -> str:
+    from iterplan_compiler.synthesis.explain import losing_head
+
+    if g.reach is None or not exact:
+        head = losing_head(None, None)
     else:
-        losing = g.count(reach & ~W & ~g.error)
-        head = (f"unrealizable: the initial state is losing ({losing} reachable non-ERROR "
-                f"game states are losing)")
+        head = losing_head(g.count(reach & ~W & ~g.error), g.count(reach & ~g.error))
     if not explain:
         return head
-    if g.reach is None or g.count(reach) > 50_000:
-        return head + "\n(game too large for a counter-strategy trace; try a smaller instance)"
+    if g.reach is None or g.count(reach) > EXPLAIN_MAX_STATES:
+        return head + _TOO_LARGE
     from iterplan_compiler.synthesis.explain import explain_losing
     from iterplan_compiler.synthesis.explicit import build_game
 

@@ -17,9 +17,12 @@ stops once ``S_j[k] = W``; ``m`` steps without growth would mean a solver bug.  
 layers is the controller's depth, not the game size.
 
 Controller.  From ``(s0, 0)`` the controller states ``(s, j)`` are enumerated breadth-first;
-the moves of ``s`` come from the components' own transitions (:class:`explicit.ProductMoves`),
-and each target is classified by BDD membership tests (a rank is a binary search over the
-layers).  So the explicit work is proportional to the controller, not to the game.  The rule
+the moves of ``s`` come from the components' own transitions (:class:`symbolic_eval.CachedMoves`),
+and each target is classified against the fixed sets compiled for Python-speed walks
+(:class:`symbolic_eval.CompiledSets`; a rank is one walk of :class:`symbolic_eval.RankTable`).
+So the explicit work is proportional to the controller, not to the game (Fire Patrol N = 14:
+~60 µs CPU per controller state, against ~300 µs with ``dd`` cube tests, a binary search over
+the layers and unmemoised moves; measured figures in :mod:`symbolic_eval`).  The rule
 is exactly :func:`strategy.extract_controller`'s (§3.6): every uncontrollable successor; the
 controllable ones that are better by rank (any winning one from a "may increase" state);
 with ``permissive``, winning but not better controllable moves as ``#w#_a``.
@@ -32,8 +35,8 @@ from collections.abc import Callable
 from typing import Any
 
 from iterplan_compiler.ir.lts import LTS, make_lts
-from iterplan_compiler.synthesis.explicit import ProductMoves
 from iterplan_compiler.synthesis.strategy import PERMISSIVE_PREFIX
+from iterplan_compiler.synthesis.symbolic_eval import CachedMoves, CompiledSets, RankTable
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
 
 Node = Any
@@ -71,53 +74,50 @@ def rank_layers(g: SymbolicGame, W: Node, goal: Node, A: list[Node]) -> list[Nod
 
 
 class _Oracle:
-    """Membership and rank queries on state tuples, cached per tuple."""
+    """Membership and rank queries on state tuples: each set compiled once
+    (:class:`symbolic_eval.CompiledSets`), ranks cached per (state, guarantee)."""
 
     def __init__(self, g: SymbolicGame, W: Node, layers: list[list[Node]]) -> None:
         self.g, self.W, self.layers = g, W, layers
-        self._cube: dict[State, Node] = {}
+        self._sets = CompiledSets(g.bdd, g.cur)
+        self.member = self._sets.member  # member(root, state)
+        self._roots: dict[int, tuple[Node, int]] = {}  # id(set) -> (set kept alive, root)
+        self._w = self.root(W)
+        self._tables = [RankTable(self._sets, js, f"_rank{j}", _INF)
+                        for j, js in enumerate(layers)]
         self._rank: dict[tuple[State, int], int] = {}
-        self._memo: dict[tuple[int, State], bool] = {}
+
+    def root(self, u: Node) -> int:
+        """The compiled root of ``u`` (compiled on first use)."""
+        hit = self._roots.get(id(u))
+        if hit is None:
+            hit = self._roots[id(u)] = (u, self._sets.add(u))
+        return hit[1]
 
     def has(self, u: Node, s: State) -> bool:
-        """``s ∈ u`` as ``cube(s) ≤ u``, memoised per (set, state): the sets queried are a
-        fixed handful (W, G_j, F, A_i, the layers), kept alive by the oracle, so ``id`` is a
-        stable key."""
-        key = (id(u), s)
-        r = self._memo.get(key)
-        if r is None:
-            cube = self._cube.get(s)
-            if cube is None:
-                cube = self._cube[s] = self.g.state_cube(s)
-            r = self._memo[key] = bool(cube <= u)
-        return r
+        """``s ∈ u`` (``u`` compiled on first use; the sets asked about are a fixed handful,
+        kept alive by the oracle, so ``id`` is a stable key)."""
+        return self._sets.member(self.root(u), s)
 
     def below(self, j: int, k: int, s: State | None) -> bool:
         """``r_j(s) ≤ k`` (False for ``k < 0`` and for losing / ERROR states)."""
         if s is None or k < 0:
             return False
-        layers = self.layers[j]
-        return self.has(layers[min(k, len(layers) - 1)], s)
+        return self.rank(j, s) <= k
 
     def winning(self, s: State | None) -> bool:
-        return s is not None and self.has(self.W, s)
+        return s is not None and self._sets.member(self._w, s)
 
     def rank(self, j: int, s: State | None) -> int:
-        """Index of the first layer holding ``s`` (``len(layers)`` = ∞)."""
-        layers = self.layers[j]
-        if s is None or not self.winning(s):
+        """Index of the first layer holding ``s`` (∞ outside ``W``, the last layer): one
+        walk of the guarantee's :class:`symbolic_eval.RankTable`, cached per (state,
+        guarantee)."""
+        if s is None:
             return _INF
         key = (s, j)
         r = self._rank.get(key)
         if r is None:
-            lo, hi = 0, len(layers) - 1
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if self.has(layers[mid], s):
-                    hi = mid
-                else:
-                    lo = mid + 1
-            r = self._rank[key] = lo
+            r = self._rank[key] = self._tables[j].rank(s)
         return r
 
 
@@ -136,7 +136,7 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
     orc = _Oracle(g, W, layers)
     n = len(G)
     ctrl = g.spec.controllable
-    pm = ProductMoves(g.spec.components)
+    pm = CachedMoves(g.spec.components)
     start: tuple[State | None, int] = (pm.start, 0)
     index: dict[tuple[State | None, int], int] = {start: 0}
     order = [start]
@@ -146,6 +146,11 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
     from iterplan_compiler import limits
 
     cap = limits.current().max_states   # the controller is enumerated explicitly
+    # the fixed sets' compiled roots, looked up once (the loop runs once per controller state)
+    member = orc.member
+    g_roots = [orc.root(u) for u in G]
+    a_roots = [orc.root(u) for u in A]
+    f_root, w_root = orc.root(F), orc.root(W)
     while q:
         if len(index) > cap:
             raise limits.LimitReached("max_states", limits.states_message(
@@ -156,18 +161,19 @@ def symbolic_controller(g: SymbolicGame, W: Node, name: str, alphabet: frozenset
         k = index[(s, j)]
         if s is None:
             continue
-        in_g = orc.has(G[j], s)
+        in_g = member(g_roots[j], s)
         jn = (j + 1) % n if in_g else j
-        may_increase = in_g or orc.has(F, s)
+        may_increase = in_g or member(f_root, s)
         rs = orc.rank(j, s)
-        rest_a = not orc.has(A[rs % m], s)
+        rest_a = not member(a_roots[rs % m], s)
         for a, t in pm.moves(s):  # distinct, in a fixed order
             if a not in ctrl:
                 ok = True
             elif may_increase:
-                ok = orc.winning(t)
+                ok = t is not None and member(w_root, t)
             else:  # r_j(t) < r_j(s), or equal and s outside A_{a(r_j(s))}
-                ok = orc.below(j, rs - 1, t) or (rest_a and orc.below(j, rs, t))
+                rt = orc.rank(j, t)
+                ok = rt < rs or (rest_a and rt == rs)
             label = a
             if not ok:
                 if not (permissive and a in ctrl and orc.winning(t)):

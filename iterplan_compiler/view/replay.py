@@ -56,7 +56,7 @@ def load_run(run_dir: str | Path, grid: Any = None) -> dict:
                 track.append([_float(row["t"]), round(_float(row["lat"]), 7),
                               round(_float(row["lon"]), 7), _float(row["alt"]),
                               _float(row["east"]), _float(row["north"])])
-        events = []
+        events: list[list[Any]] = []
         with open(files["events.csv"], newline="") as fh:
             for row in csv.DictReader(fh):
                 events.append([_float(row["t"]), row["kind"], row["label"], int(row["state"]),

@@ -53,7 +53,7 @@ def make_app(hub: Hub, poll: float = 0.2) -> web.Application:
     app = web.Application()
     sockets: set[web.WebSocketResponse] = set()
 
-    async def index(request: web.Request) -> web.Response:
+    async def index(request: web.Request) -> web.StreamResponse:
         return web.FileResponse(STATIC / "index.html",
                                 headers={"Cache-Control": "no-store"})
 

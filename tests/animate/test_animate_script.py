@@ -106,7 +106,7 @@ def test_bad_commands_are_located_errors(spec, tmp_path, capsys, bad, message):
 def test_bad_names(spec, tmp_path, capsys):
     s = script(tmp_path, "quit")
     code, _, err = run(capsys, "animate", spec, "SIS", "--script", s)
-    assert code == 1 and "error[E504]: no process or composite named 'SIS'; did you mean 'SYS'?" in err
+    assert code == 1 and "error[E0104]: no process or composite named 'SIS'; did you mean 'SYS'?" in err
     code, _, err = run(capsys, "animate", spec, "SYS", "--spec", "G", "--script", s)
     assert code == 1 and "error[E1312]: no controllerSpec named 'G'" in err
     code, _, err = run(capsys, "animate", spec, "--script", tmp_path / "missing.txt")

@@ -85,16 +85,24 @@ def check_golden(actual: str, filename: str) -> None:
 
 # --- a stand-in for the front-end's Model and for synthesis, to test the driver and CLI --------
 
-class FakeResult:
-    """Shaped like ``synthesis.driver.SynthesisResult``."""
+def fake_result(controller: LTS | None, explanation: str = ""):
+    """A ``synthesis.driver.SynthesisResult`` with a given controller (None: unrealizable)."""
+    from iterplan_compiler.synthesis.driver import Solver, SynthesisResult, SynthesisStats
 
-    def __init__(self, controller: LTS | None, explanation: str = ""):
-        self.realizable = controller is not None
-        self.controller = controller
-        self.composition = controller
-        self.explanation = explanation
-        self.stats = {"states": controller.num_states if controller else 0,
-                      "warnings": ["fluent F: actions ['zz'] are not plant actions"]}
+    stats = SynthesisStats(Solver.SYMBOLIC, mode="gr1",
+                           warnings=("fluent F: actions ['zz'] are not plant actions",),
+                           controller_states=controller.num_states if controller else None)
+    return SynthesisResult(controller is not None, controller, controller, explanation, stats)
+
+
+def fake_load(model):
+    """A stand-in for ``pipeline.load`` that returns ``model`` (or a front-end failure)."""
+    from iterplan_compiler import pipeline
+
+    def load(path, text=None):
+        return pipeline.Elaborated(str(path), model, (), {str(path): model.source_text})
+
+    return load
 
 
 class FakeProblem:
@@ -126,6 +134,10 @@ class FakeModel:
     def names(self) -> list[str]:
         return [*self.processes, *self.controllers]
 
+    @property
+    def composites(self) -> list[str]:
+        return list(self.controllers)
+
     def controller_composites(self) -> list[str]:
         return list(self.controllers)
 
@@ -138,17 +150,17 @@ class FakeModel:
             return None, [error("E999", f"{name} is not a controller composite")]
         return FakeProblem(name, self.controllers[name][1], self.spans[name]), []
 
-    def build_lts(self, name: str):
+    def build_lts(self, name: str, unrealizable: str = "error", solve: bool = True):
         if name in self.processes:
             return self.processes[name], []
         return self.controllers[name][0], []
 
 
-def fake_synthesize(problem, solver, progress):
+def fake_synthesize(problem, **_options):
     """Stand-in for ``synthesis.driver.synthesize`` reading the outcome off the problem."""
     model = FakeModel.current
     ctl = model.controllers[problem.name][0]
-    return FakeResult(ctl, "" if ctl else "the environment can keep y.next from happening")
+    return fake_result(ctl, "" if ctl else "the environment can keep y.next from happening")
 
 
 FakeModel.current = None  # type: ignore[attr-defined]

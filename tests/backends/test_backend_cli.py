@@ -10,16 +10,18 @@ import pytest
 from backends_helpers import (
     FIRE_PATROL_CONTROLLABLE,
     FakeModel,
+    fake_load,
     fake_synthesize,
     fire_patrol,
     load_module,
 )
 
-from iterplan_compiler.backends import driver
+from iterplan_compiler import pipeline
+from iterplan_compiler.backends import output
 from iterplan_compiler.backends.graphviz import dot_binary
 from iterplan_compiler.backends.jsonout import from_json
 from iterplan_compiler.cli import main
-from iterplan_compiler.diagnostics import error
+from iterplan_compiler.diagnostics import Span, error
 from iterplan_compiler.ir.lts import make_lts, reachable
 
 SPEC_TEXT = "// a stand-in spec\ncontroller ||Unreal = E~{G}.\ncontroller ||Fire = E~{G}.\n"
@@ -34,8 +36,8 @@ def spec(tmp_path, monkeypatch):
                       {"Unreal": (None, frozenset({"has.next"})),
                        "Fire": (fire_patrol(), FIRE_PATROL_CONTROLLABLE)})
     FakeModel.current = model
-    monkeypatch.setattr(driver, "load_model", lambda p, text=None: (model, []))
-    monkeypatch.setattr(driver, "_synthesize", fake_synthesize)
+    monkeypatch.setattr(pipeline, "load", fake_load(model))
+    monkeypatch.setattr(pipeline.synthesis_driver, "synthesize", fake_synthesize)
     return path
 
 
@@ -45,11 +47,11 @@ def test_compile_default_composite_writes_module(spec, tmp_path, capsys):
     err = capsys.readouterr().err
     # The stub controller's unreachable state 9 is dropped by the canonical renumbering.
     assert "controller for 'Fire' (11 states)" in err
-    assert "warning[W501]: fluent F: actions ['zz'] are not plant actions" in err
+    assert "warning[W0905]: fluent F: actions ['zz'] are not plant actions" in err
     mod = load_module(out.read_text(), tmp_path, "fire_ctl_cli")
     assert mod.NAME == "Fire" and set(mod.TRANSITIONS) == set(reachable(fire_patrol()).transitions)
     assert mod.SPEC_FILE == "fire_patrol.lts"
-    assert mod.SPEC_SHA256 == driver.spec_sha256(SPEC_TEXT)
+    assert mod.SPEC_SHA256 == output.spec_sha256(SPEC_TEXT)
     text = out.read_text()
     assert "# controller composite Fire: fire_patrol.lts:3:1" in text
     assert "# controllerSpec G: fire_patrol.lts:1:1" in text
@@ -66,14 +68,14 @@ def test_compile_to_stdout_is_deterministic(spec, capsys):
 def test_compile_unrealizable_explains(spec, capsys):
     assert main(["compile", str(spec), "-c", "Unreal"]) == 1
     err = capsys.readouterr().err
-    assert "error[E501]" in err and "no controller exists for 'Unreal'" in err
+    assert "error[E0901]" in err and "no controller exists for 'Unreal'" in err
     assert "keep y.next from happening" in err
     assert "fire_patrol.lts:2:1" in err and "controller ||Unreal" in err  # source line shown
 
 
 def test_compile_unknown_composite(spec, capsys):
     assert main(["compile", str(spec), "-c", "Nope"]) == 1
-    assert "error[E502]" in capsys.readouterr().err
+    assert "error[E0904]" in capsys.readouterr().err
 
 
 def test_compile_no_controller_composite(spec, capsys):
@@ -83,11 +85,12 @@ def test_compile_no_controller_composite(spec, capsys):
 
 
 def test_compile_frontend_errors_stop(spec, monkeypatch, capsys):
-    diag = error("E101", "unexpected token", driver.Span(str(spec), 2, 12))
-    monkeypatch.setattr(driver, "load_model", lambda p, text=None: (None, [diag]))
+    diag = error("E0001", "unexpected token", Span(str(spec), 2, 12))
+    monkeypatch.setattr(pipeline, "load", lambda p, text=None: pipeline.Elaborated(
+        str(p), None, (diag,), {str(p): SPEC_TEXT}))
     assert main(["compile", str(spec)]) == 1
     err = capsys.readouterr().err
-    assert "fire_patrol.lts:2:12: error[E101]: unexpected token" in err
+    assert "fire_patrol.lts:2:12: error[E0001]: unexpected token" in err
 
 
 def test_compile_missing_file(tmp_path, capsys):
@@ -132,7 +135,7 @@ def test_dot_controller_and_errors(spec, tmp_path, capsys):
     assert main(["dot", str(spec), "Nope"]) == 1
     assert "defined: Iterator, Unreal, Fire" in capsys.readouterr().err
     assert main(["dot", str(spec), "Unreal", "--controller"]) == 1
-    assert "E501" in capsys.readouterr().err
+    assert "E0901" in capsys.readouterr().err
     assert main(["dot", str(spec), "-o", str(tmp_path / "x.bmp")]) == 2
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 from backends_helpers import GOLDEN_DIR, check_golden, load_module
 
-from iterplan_compiler.backends import driver
+from iterplan_compiler import pipeline
 from iterplan_compiler.cli import main
 from iterplan_compiler.ir.lts import reachable
 from iterplan_compiler.runtime.controller import RefusedEvent
@@ -51,7 +51,7 @@ def test_golden_spec_outputs(capsys):
 
 
 def test_golden_spec_behaviour(tmp_path):
-    out = driver.compile_spec(PATROL)
+    out = pipeline.compile_spec(PATROL)
     assert out.composite == "Patrol" and out.text is not None
     mod = load_module(out.text, tmp_path, "patrol_ctl")
     c = mod.make_controller()
@@ -125,10 +125,10 @@ def test_realizable_conformance_specs_compile_to_equal_tables(tmp_path):
     for i, (file, composite) in enumerate(_realizable_rows(root)):
         if time.perf_counter() - start > budget:
             break
-        out = driver.compile_spec(root / file, composite=composite)
+        out = pipeline.compile_spec(root / file, composite=composite)
         if out.text is None:
             codes = {d.code for d in out.diagnostics if d.is_error}
-            if driver.E_NOT_EMITTABLE in codes:  # the back-end's own failure
+            if pipeline.E_NOT_EMITTABLE in codes:  # the back-end's own failure
                 failures.append(f"{file}: {out.diagnostics[-1].message}")
             else:  # front-end / synthesis limits are reported by `iterc conformance`
                 upstream.append(f"{file}: {sorted(codes)}")
@@ -155,7 +155,7 @@ def test_unrealizable_spec_is_explained(tmp_path, capsys):
     spec.write_text(text)
     assert main(["compile", str(spec), "-o", str(tmp_path / "x.py")]) == 1
     err = capsys.readouterr().err
-    assert "hopeless.lts:" in err and "error[E501]" in err
+    assert "hopeless.lts:" in err and "error[E0901]" in err
     assert "no controller exists for 'Patrol'" in err
     assert "controller ||Patrol" in err  # the composite's source line is shown
     assert not (tmp_path / "x.py").exists()

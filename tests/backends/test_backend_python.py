@@ -227,7 +227,7 @@ def test_table_equals_lts_for_random_controllers(tmp_path_factory, lts, ctrl, da
 @given(lts=deterministic_lts(), data=st.data())
 def test_canonical_numbering_ignores_synthesis_numbering(lts, data):
     """Renumbering the controller's states does not change the emitted module."""
-    from iterplan_compiler.backends.driver import canonical_controller
+    from iterplan_compiler.backends.output import canonical_controller
 
     perm = data.draw(st.permutations(range(lts.num_states)))
     shuffled = make_lts(lts.name, lts.num_states,

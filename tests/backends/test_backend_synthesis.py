@@ -2,7 +2,7 @@
 
 This pins the contract between ``synthesis.driver.synthesize`` and the back-end: the emitted
 module's table is exactly the synthesised controller, and unrealizable problems come back as
-an E501 diagnostic carrying synthesis's explanation.
+an E0901 diagnostic carrying synthesis's explanation.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 from backends_helpers import load_module
 
-from iterplan_compiler.backends import driver
+from iterplan_compiler import pipeline
 from iterplan_compiler.cli import main
 from iterplan_compiler.diagnostics import Span
 from iterplan_compiler.ir.formulas import Fluent, FluentProp
@@ -50,7 +50,13 @@ class ProblemModel:
                                          guarantees=(FluentProp("Arrived"),), **common),
         }
 
+    source_text = "// stand-in\n"
+
     def names(self):
+        return list(self.problems)
+
+    @property
+    def composites(self):
         return list(self.problems)
 
     def controller_composites(self):
@@ -67,13 +73,14 @@ class ProblemModel:
 def spec(tmp_path, monkeypatch):
     path = tmp_path / "visit.lts"
     path.write_text("// stand-in\n", encoding="utf-8")
-    monkeypatch.setattr(driver, "load_model", lambda p, text=None: (ProblemModel(str(p)), []))
+    monkeypatch.setattr(pipeline, "load", lambda p, text=None: pipeline.Elaborated(
+        str(p), ProblemModel(str(p)), (), {str(p): ProblemModel.source_text}))
     return path
 
 
 @pytest.mark.parametrize("solver", ["symbolic", "explicit"])
 def test_module_table_equals_synthesised_controller(spec, tmp_path, solver):
-    out = driver.compile_spec(spec, composite="Visit", solver=solver)
+    out = pipeline.compile_spec(spec, composite="Visit", solver=solver)
     assert out.text is not None, out.diagnostics
     mod = load_module(out.text, tmp_path, f"visit_{solver}")
     assert set(mod.TRANSITIONS) == set(out.controller.transitions)
@@ -96,7 +103,7 @@ def test_module_table_equals_synthesised_controller(spec, tmp_path, solver):
 def test_unrealizable_reports_explanation(spec, capsys):
     assert main(["compile", str(spec), "-c", "Hopeless"]) == 1
     err = capsys.readouterr().err
-    assert "error[E501]" in err and "no controller exists for 'Hopeless'" in err
+    assert "error[E0901]" in err and "no controller exists for 'Hopeless'" in err
     assert "guarantee" in err  # synthesis's explanation is passed through
 
 

@@ -131,10 +131,10 @@ def test_unknown_composite_name(command, capsys):
 
 def test_verify_unknown_names_suggest(capsys):
     res = run_cli(capsys, "verify", GOLDEN_SPEC, "--assert", "AskForevr", "--on", "Environment")
-    m = assert_input_error(res, GOLDEN_SPEC, code="E304")
+    m = assert_input_error(res, GOLDEN_SPEC, code="E0607")
     assert "did you mean 'AskForever'" in m["msg"]
     res = run_cli(capsys, "verify", GOLDEN_SPEC, "--assert", "AskForever", "--on", "Enviroment")
-    m = assert_input_error(res, GOLDEN_SPEC, code="E305")
+    m = assert_input_error(res, GOLDEN_SPEC, code="E0608")
     assert "did you mean 'Environment'" in m["msg"]
 
 
@@ -155,7 +155,7 @@ controller ||C = (Plant)~{Goal}.
 
 
 @pytest.mark.parametrize("argv", [["synth"], ["compile"], ["dot", "--controller"], ["dot"],
-                                  ["lts", "C"], ["check", "--build"]])
+                                  ["check", "--build"]])
 def test_unrealizable_spec_exits_1(argv, write, capsys):
     spec = write("unreal.lts", UNREALIZABLE)
     res = run_cli(capsys, argv[0], spec, *argv[1:])
@@ -165,6 +165,29 @@ def test_unrealizable_spec_exits_1(argv, write, capsys):
     if argv[0] != "synth":  # synth prints a report on stdout instead of a diagnostic
         m = assert_input_error(res, spec, located=True)
         assert m["line"] == "12"
+
+
+def test_lts_builds_the_plant_without_solving(write, capsys, monkeypatch):
+    """`iterc lts` never runs the GR(1) solver: a controller composite (here unrealizable)
+    is shown as the plant of its game, with a note saying so."""
+    from iterplan_compiler.synthesis import driver
+
+    def no_solving(*_a, **_k):
+        raise AssertionError("iterc lts ran the GR(1) solver")
+
+    monkeypatch.setattr(driver, "synthesize", no_solving)
+    spec = write("unreal.lts", UNREALIZABLE)
+    res = run_cli(capsys, "lts", spec, "C")
+    assert_no_crash(res)
+    assert res.code == 0, res.err
+    assert res.out.startswith("C: states 3 transitions 4")
+    assert "note: C is a controller composite; this is the plant" in res.err
+    # a composite using the controller composite is built on its plant too
+    spec = write("uses.lts", UNREALIZABLE + "||Sys = (C).\n")
+    res = run_cli(capsys, "lts", spec, "Sys", "--stats")
+    assert res.code == 0, res.err
+    assert res.out.startswith("Sys: states 3 transitions 4")
+    assert "note: Sys uses controller composite(s) C, built here as the plant" in res.err
 
 
 def test_output_path_unwritable(tmp_path, capsys):

@@ -10,7 +10,7 @@ import sys
 import pytest
 from cli_helpers import EXAMPLES, GOLDEN_SPEC, assert_input_error, assert_no_crash, run_cli
 
-from iterplan_compiler import frontend
+from iterplan_compiler import pipeline
 from iterplan_compiler.backends.jsonout import from_json
 from iterplan_compiler.ir.lts import reachable
 from iterplan_compiler.ir.minimise import bisimilar
@@ -122,7 +122,7 @@ def test_emitted_fsp_and_json_describe_the_same_controller(fire_outputs, tmp_pat
     out_dir, outputs = fire_outputs
     lts_json, controllable = from_json(outputs["json"])
     assert "has.next" in controllable and "y.next" not in controllable
-    model, diags = frontend.load(str(out_dir / "fire_ctl.lts"), text=outputs["fsp"])
+    model, diags = pipeline.load_model(str(out_dir / "fire_ctl.lts"), text=outputs["fsp"])
     assert model is not None and not any(d.is_error for d in diags), diags
     (name,) = model.processes
     lts_fsp, diags = model.build_lts(name)
@@ -184,9 +184,9 @@ def test_verify_state_limit_is_a_diagnostic(capsys):
     res = run_cli(capsys, "verify", FIRE, "--assert", "VisitCondition", "--on",
                   "FirePatrolSystem", "--max-states", "3")
     # --max-states (limits.py) bounds composition, formula automata and the model-checking
-    # product; whichever is built first reports it (E0402 composition, E303 formula automaton)
+    # product; whichever is built first reports it (E0402 composition, E0606 formula automaton)
     try:
         m = assert_input_error(res, FIRE, code="E0402", located=True)
     except AssertionError:
-        m = assert_input_error(res, FIRE, code="E303", located=True)
+        m = assert_input_error(res, FIRE, code="E0606", located=True)
     assert "exceeds 3 states" in m["msg"] and "--max-states" in m["msg"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from iterplan_compiler.experiments import catalog, flight
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 
 from .behaviour import cells, check_cover, check_fire_patrol, check_ordered_patrol
 

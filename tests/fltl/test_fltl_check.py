@@ -160,7 +160,7 @@ def test_actions_outside_the_formula_are_positions():
 
 def test_unknown_fluent_is_a_diagnostic():
     res, diags = check_assert(CHOICE, NamedFormula("A", "assert", FluentProp("Nope")), {})
-    assert res is None and [d.code for d in diags] == ["E301"]
+    assert res is None and [d.code for d in diags] == ["E0604"]
 
 
 def _chain(lasso: Lasso):

@@ -1,4 +1,4 @@
-"""Formulas nested far beyond Python's recursion limit are reported as E303, not raised (found
+"""Formulas nested far beyond Python's recursion limit are reported as E0606, not raised (found
 by the CLI QA: generated specs can nest ~1000 deep)."""
 
 from iterplan_compiler.fltl.check import check_assert
@@ -29,7 +29,7 @@ def test_moderate_nesting_still_works():
 def test_too_deep_is_a_diagnostic():
     deep = NamedFormula("P", "ltl_property", Always(_nested(5000, True)))
     lts, diags = safety_lts(deep, FLUENTS, constraint=False)
-    assert lts is None and [d.code for d in diags] == ["E303"]
+    assert lts is None and [d.code for d in diags] == ["E0606"]
     assert "nested too deeply" in diags[0].message
     result, diags = check_assert(SYS, NamedFormula("Q", "assert", _nested(5000, False)), FLUENTS)
-    assert result is None and [d.code for d in diags] == ["E303"]
+    assert result is None and [d.code for d in diags] == ["E0606"]

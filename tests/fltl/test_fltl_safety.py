@@ -101,7 +101,7 @@ def test_non_safety_formula_is_a_diagnostic_with_a_witness():
               Until(act("p"), act("q"))):
         lts, diags = compile_(f, extra={"r"})
         assert lts is None
-        assert [d.code for d in diags] == ["E302"]
+        assert [d.code for d in diags] == ["E0605"]
         assert "safety" in diags[0].message and ")^w" in diags[0].message
 
 
@@ -113,9 +113,9 @@ def test_semantic_not_syntactic_safety():
 
 def test_unknown_fluent_and_unsatisfiable():
     lts, diags = compile_(FluentProp("Nope"))
-    assert lts is None and [d.code for d in diags] == ["E301"]
+    assert lts is None and [d.code for d in diags] == ["E0604"]
     lts, diags = compile_(Const(False), extra={"x"})
-    assert [d.code for d in diags] == ["W301"]
+    assert [d.code for d in diags] == ["W0604"]
     assert lts.transitions == ((0, "x", ERROR),)
     c, _ = compile_(Const(False), extra={"x"}, constraint=True)
     assert c.num_states == 1 and c.num_transitions == 0
@@ -124,7 +124,7 @@ def test_unknown_fluent_and_unsatisfiable():
 def _check_automaton(formula, lasso, word):
     lts, diags = compile_(formula, FLUENTS)
     if lts is None:
-        assert [d.code for d in diags] == ["E302"]
+        assert [d.code for d in diags] == ["E0605"]
         return None
     assert minimise(lts).num_states == lts.num_states
     # Deterministic and complete over its alphabet (ltl_property).
@@ -141,7 +141,7 @@ def _check_automaton(formula, lasso, word):
     end = run_dfa(lts, w)
     stuck = end != ERROR and all(t == ERROR for s, _, t in lts.transitions if s == end)
     if stuck:  # only an unsatisfiable formula has a state without a good move
-        assert end == lts.initial and [d.code for d in diags] == ["W301"]
+        assert end == lts.initial and [d.code for d in diags] == ["W0604"]
     if end == ERROR or stuck:
         assert not is_good_prefix(formula, w, FLUENTS, lts.alphabet, bound=3)
     else:

@@ -6,8 +6,7 @@ from dataclasses import dataclass, field
 import pytest
 from fltl_helpers import act, fl
 
-from iterplan_compiler import cli, frontend
-from iterplan_compiler.diagnostics import error
+from iterplan_compiler import cli, pipeline
 from iterplan_compiler.ir.formulas import Always, Eventually, FluentProp, Implies, NamedFormula
 from iterplan_compiler.ir.lts import make_lts
 
@@ -20,10 +19,11 @@ class FakeModel:
     source_path: str = "spec.lts"
     source_text: str = ""
 
-    def build_lts(self, name):
-        if name in self.lts:
-            return self.lts[name], []
-        return None, [error("E999", f"no process or composite named '{name}'")]
+    def names(self):
+        return tuple(self.lts)
+
+    def build_lts(self, name, unrealizable="error", solve=True):
+        return self.lts[name], []
 
 
 @pytest.fixture
@@ -40,7 +40,8 @@ def spec(tmp_path, monkeypatch):
         },
         {"On": fl("On", {"a"}, {"b"})},
     )
-    monkeypatch.setattr(frontend, "load", lambda p, text=None: (model, []), raising=False)
+    monkeypatch.setattr(pipeline, "load",
+                        lambda p, text=None: pipeline.Elaborated(str(p), model, (), {}))
     return str(path)
 
 
@@ -65,11 +66,11 @@ def test_verify_prints_lasso_counterexample(spec, capsys):
 def test_verify_reports_bad_names(spec, capsys):
     assert cli.main(["verify", spec, "--assert", "Rsp", "--on", "Sys"]) == 1
     err = capsys.readouterr().err
-    assert "E304" in err and "did you mean 'Resp'" in err
+    assert "E0607" in err and "did you mean 'Resp'" in err
     assert cli.main(["verify", spec, "--assert", "Resp", "--on", "Nope"]) == 1
-    assert "E999" in capsys.readouterr().err
+    assert "E0608" in capsys.readouterr().err
     assert cli.main(["verify", spec, "--assert", "Bad", "--on", "Sys"]) == 1
-    assert "E301" in capsys.readouterr().err
+    assert "E0604" in capsys.readouterr().err
 
 
 def test_verify_usage(spec, capsys):

@@ -3,8 +3,8 @@
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.frontend import load
 from iterplan_compiler.ir.minimise import bisimilar
+from iterplan_compiler.pipeline import load_model as load
 
 CONSTRAINT_TEST = """\
 constraint C1 = [] (p -> X q)
@@ -72,7 +72,7 @@ def test_non_safety_ltl_property_points_at_its_declaration(model):
     lts, diags = m.build_lts("Live")
     assert lts is None
     codes = [(d.code, d.span.line) for d in diags]
-    assert ("E302", 12) in codes
+    assert ("E0605", 12) in codes
 
 
 def test_verify_command(model, capsys):
@@ -109,6 +109,6 @@ def test_verify_unknown_assert_and_composite(model, capsys):
     _, path = model(MUTEX)
     assert cli.main(["verify", path, "--assert", "MUTEXX", "--on", "SYS"]) == 1
     err = capsys.readouterr().err
-    assert "E304" in err and "did you mean 'MUTEX'" in err
+    assert "E0607" in err and "did you mean 'MUTEX'" in err
     assert cli.main(["verify", path, "--assert", "MUTEX", "--on", "NOPE"]) == 1
     assert "error" in capsys.readouterr().err

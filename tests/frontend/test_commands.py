@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 
 DIAG = re.compile(r"^(?P<file>[^\s:][^:]*?)(?::(?P<line>\d+):(?P<col>\d+))?: "
                   r"error\[(?P<code>[A-Z]\d+)\]: (?P<msg>.*)$", re.M)
@@ -82,7 +82,7 @@ def test_lts_unknown_name_is_a_coded_error(tmp_path, capsys):
     code, _, err = _run(capsys, "lts", p, "Cc")
     assert code == 1
     [e] = _errors(err)
-    assert (e["file"], e["code"]) == (str(p), "E504") and "'Cc'" in e["msg"]
+    assert (e["file"], e["code"]) == (str(p), "E0104") and "'Cc'" in e["msg"]
     code, _, err = _run(capsys, "lts", p, "PP")
     assert "did you mean 'P'" in err
 
@@ -91,7 +91,7 @@ def test_lts_empty_file_is_a_coded_error(tmp_path, capsys):
     p = _write(tmp_path, "empty.lts", "")
     code, _, err = _run(capsys, "lts", p)
     assert code == 1
-    assert [e["code"] for e in _errors(err)] == ["E504"]
+    assert [e["code"] for e in _errors(err)] == ["E0104"]
 
 
 # ---------------------------------------------------------------- iterc synth
@@ -109,14 +109,14 @@ def test_synth_without_controller_composite(tmp_path, capsys):
     p = _write(tmp_path, "plain.lts", "A = (a -> A).\n||S = (A).\n")
     code, _, err = _run(capsys, "synth", p)
     assert code == 1
-    assert [(e["file"], e["code"]) for e in _errors(err)] == [(str(p), "E502")]
+    assert [(e["file"], e["code"]) for e in _errors(err)] == [(str(p), "E0904")]
 
 
 def test_synth_unknown_composite(tmp_path, capsys):
     p = _write(tmp_path, "p.lts", PATROL)
     code, _, err = _run(capsys, "synth", p, "D")
     assert code == 1
-    assert [(e["file"], e["code"]) for e in _errors(err)] == [(str(p), "E502")]
+    assert [(e["file"], e["code"]) for e in _errors(err)] == [(str(p), "E0904")]
 
 
 def test_synth_syntax_error_shows_source_and_caret(tmp_path, capsys):
@@ -134,7 +134,7 @@ def test_synth_shows_why_a_goal_cannot_be_posed(tmp_path, capsys):
     assert code == 1
     assert "C: UNREALIZABLE" in out
     [e] = _errors(err)
-    assert e["code"].startswith("S") and e["line"] == "6"
+    assert e["code"] == "E0907" and e["line"] == "6"  # goal not propositional
     assert "controller ||C" in err  # the composite's source line
 
 

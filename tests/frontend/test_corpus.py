@@ -16,10 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.frontend import load
-from iterplan_compiler.frontend.elaborate import SYNTHESIS_KEYWORDS, _cb_refs
+from iterplan_compiler.frontend.elaborate import GAME_KEYWORDS, _cb_refs
+from iterplan_compiler.ir.model import Unrealizable
+from iterplan_compiler.pipeline import load_model as load
 
-_SKIP_KW = SYNTHESIS_KEYWORDS
+_SKIP_KW = GAME_KEYWORDS
 
 
 def _needs_synthesis(model, name: str, seen: frozenset[str] = frozenset()) -> bool:
@@ -103,7 +104,7 @@ def test_alphabet_rows(row):
     assert model is not None and not errs
     expected = set(re.search(r"\[([^\]]*)\]", row["checks"]).group(1).split())
     # an unrealizable controller composite is MTSA's plant `C_#NC#` (§3.7)
-    lts, ds = model.build_lts(row["composite"], unrealizable="plant")
+    lts, ds = model.build_lts(row["composite"], unrealizable=Unrealizable.PLANT)
     assert lts is not None, [d.message for d in ds]
     assert set(lts.alphabet) == expected
 

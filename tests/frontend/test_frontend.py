@@ -7,11 +7,11 @@ from fractions import Fraction
 import pytest
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.ir import formulas as F
 from iterplan_compiler.ir.lts import ERROR, TAU
+from iterplan_compiler.pipeline import load_model as load
 
 
 def build(text: str, name: str):

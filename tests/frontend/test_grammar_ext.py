@@ -4,10 +4,10 @@ bind (`[i:R]:P(i)`), literal numbers after a dot (`a.1`)."""
 from __future__ import annotations
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.printer import print_spec
+from iterplan_compiler.pipeline import load_model as load
 
 TEXT = """const N = 2
 P(I=0) = (a[I] -> b.1 -> P).
@@ -55,7 +55,11 @@ def test_parser_cache_location(monkeypatch, tmp_path):
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv("ITERPLAN_NO_CACHE", raising=False)
-    path = parse._cache_file()
+    path = parse._cache_file("start: A")
     assert isinstance(path, str) and path.startswith(str(tmp_path / "iterplan"))
+    # one file per grammar: checkouts with different grammars do not overwrite each other
+    other = parse._cache_file("start: B")
+    assert isinstance(other, str) and other != path
+    assert parse._cache_file("start: A") == path
     monkeypatch.setenv("ITERPLAN_NO_CACHE", "1")
-    assert parse._cache_file() is False
+    assert parse._cache_file("start: A") is False

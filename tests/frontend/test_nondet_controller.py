@@ -1,15 +1,16 @@
 """MTSA §3.7/§3.8 for ``controller`` composites: a nondeterministic (or tau) plant product is
 controlled-determinised (action ``-1``, uncontrollable) before synthesis; an unrealizable
-composite is error E0901, or -- with ``build_lts(name, unrealizable="plant")`` -- MTSA's
+composite is error E0901, or -- with ``build_lts(name, unrealizable=Unrealizable.PLANT)`` -- MTSA's
 composition, the plant renamed ``C_#NC#``."""
 
 from __future__ import annotations
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
 from iterplan_compiler.frontend.operators import CONTROL_ACTION, eliminate_tau
 from iterplan_compiler.ir.alphabet_ops import is_deterministic
 from iterplan_compiler.ir.lts import ERROR, TAU, make_lts
+from iterplan_compiler.ir.model import Unrealizable
+from iterplan_compiler.pipeline import load_model as load
 
 # MTSA's Alphabet/lts_alphabet_hiding_compose.lts: M offers c3 twice (nondeterministic)
 HIDING_COMPOSE = """\
@@ -71,7 +72,7 @@ def test_unrealizable_nondeterministic_plant_is_an_error_by_default():
 
 
 def test_unrealizable_plant_mode_gives_mtsa_composition():
-    lts, diags = _model(HIDING_COMPOSE).build_lts("C", unrealizable="plant")
+    lts, diags = _model(HIDING_COMPOSE).build_lts("C", unrealizable=Unrealizable.PLANT)
     assert lts is not None and not has_errors(diags)
     assert [d.code for d in diags] == ["W0902"]
     assert lts.name == "C_#NC#"
@@ -82,7 +83,7 @@ def test_unrealizable_plant_mode_gives_mtsa_composition():
 
 def test_unrealizable_deterministic_plant_mode_is_the_plant_product():
     model = _model(DET_UNREALIZABLE)
-    lts, diags = model.build_lts("C", unrealizable="plant")
+    lts, diags = model.build_lts("C", unrealizable=Unrealizable.PLANT)
     assert lts is not None and lts.name == "C_#NC#"
     assert CONTROL_ACTION not in lts.alphabet
     plant, _ = model.build_lts("P")
@@ -93,7 +94,7 @@ def test_plant_mode_does_not_change_realizable_or_plain_composites():
     model = _model(NONDET_REALIZABLE + "||Plain = (P).\n")
     for name in ("K", "Plain"):
         a, da = model.build_lts(name)
-        b, db = model.build_lts(name, unrealizable="plant")
+        b, db = model.build_lts(name, unrealizable=Unrealizable.PLANT)
         assert a is not None and a is b and da == db
 
 

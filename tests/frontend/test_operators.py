@@ -9,7 +9,6 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.diagnostics import has_errors
-from iterplan_compiler.frontend import load
 from iterplan_compiler.frontend.operators import (
     CONTROL_ACTION,
     STAR_ACTION,
@@ -18,6 +17,7 @@ from iterplan_compiler.frontend.operators import (
 from iterplan_compiler.ir.alphabet_ops import is_deterministic
 from iterplan_compiler.ir.lts import ERROR, make_lts
 from iterplan_compiler.ir.minimise import bisimilar
+from iterplan_compiler.pipeline import load_model as load
 
 ROOT = Path(__file__).resolve().parents[2].parent / "shared" / "conformance" / "mtsa"
 if not ROOT.is_dir():

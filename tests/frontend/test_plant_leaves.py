@@ -3,7 +3,7 @@ explicit product of `Env` is built; composites with operators or tails stay one 
 
 from __future__ import annotations
 
-from iterplan_compiler.frontend import load
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.synthesis.driver import synthesize
 
 SPEC = """

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.cli import main as iterc
-from iterplan_compiler.gr1.explicit import check_strategy, evaluate, solve_explicit
+from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 from iterplan_compiler.gr1.slugsin import parse
 from iterplan_compiler.gr1.solve import SolverOptions, solve
 

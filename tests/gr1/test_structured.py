@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from iterplan_compiler.diagnostics import render
 from iterplan_compiler.gr1 import slugsin, structured
-from iterplan_compiler.gr1.explicit import check_strategy, evaluate, solve_explicit
+from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 from iterplan_compiler.gr1.solve import solve
 
 
@@ -93,6 +93,40 @@ def test_boolean_spec_matches_slugsin_formulation():
     assert ra.game.bdd.count(ra.winning, nvars=2 * len(names)) == \
         rb.game.bdd.count(rb.winning, nvars=2 * len(names))
     assert len(ra.winning) == len(rb.winning)
+
+
+def _same_lines(a, b):
+    names = a.inputs + a.outputs
+    for sec in slugsin.FORMULA_SECTIONS:
+        assert len(a.lines(sec)) == len(b.lines(sec)), sec
+        for la, lb in zip(a.lines(sec), b.lines(sec), strict=True):
+            for bits in itertools.product((False, True), repeat=2 * len(names)):
+                cur = dict(zip(names, bits[:len(names)], strict=True))
+                nxt = dict(zip(names, bits[len(names):], strict=True))
+                assert evaluate(la.expr, cur, nxt) == evaluate(lb.expr, cur, nxt), sec
+
+
+def test_prefix_lines_pass_through_like_slugs():
+    """slugs' structured compiler accepts lines already in slugsin prefix notation (G112
+    before): a pure-prefix file reads as the same spec as with the slugsin reader, and a
+    file may mix both notations line by line."""
+    a = _parse_ok(SLUGSIN_ARBITER)
+    b, _ = slugsin.parse(SLUGSIN_ARBITER)
+    _same_lines(a, b)
+    both = _parse_ok("[INPUT]\nr\nx: 0...3\n[OUTPUT]\ng\n[SYS_TRANS]\n| ! r g'\n"
+                     "r -> g'\n& x@0 ! x@1'\nx = 1 & x' != 2\n")
+    rows = both.lines("SYS_TRANS")[-4:]
+    cur = {"r": True, "g": False, "x@0": True, "x@1": False}
+    nxt = {"r": False, "g": True, "x@0": False, "x@1": False}
+    assert [evaluate(ln.expr, cur, nxt) for ln in rows] == [True, True, True, True]
+    nxt["g"], nxt["x@1"] = False, True  # g' false, x' = 2
+    assert [evaluate(ln.expr, cur, nxt) for ln in rows] == [False, False, False, False]
+
+
+@pytest.mark.parametrize("line", ["& a", "& a b", "a b"])
+def test_malformed_prefix_line_is_still_an_error(line):
+    spec, diags = structured.parse(f"[INPUT]\na\n[SYS_TRANS]\n{line}\n", "p.structuredslugs")
+    assert spec is None and diags[0].code in ("G112", "G113")
 
 
 # --- integers ----------------------------------------------------------------------------

@@ -7,10 +7,10 @@ from helpers_lts import E, lts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from iterplan_compiler.frontend import load
 from iterplan_compiler.ir.fsp_print import lts_to_fsp, process_name
 from iterplan_compiler.ir.lts import LTS, TAU, make_lts
 from iterplan_compiler.ir.minimise import bisimilar
+from iterplan_compiler.pipeline import load_model as load
 
 
 def reparse(m: LTS) -> LTS:

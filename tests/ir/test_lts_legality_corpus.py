@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.frontend import load
 from iterplan_compiler.ir.legality import is_legal
+from iterplan_compiler.pipeline import load_model as load
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "conformance" / "mtsa" / "Legality"
 

@@ -126,7 +126,7 @@ def test_both_checks_and_unknown_name(spec, capsys):
     assert code == 0, err
     code, out, err = run(capsys, "check", spec, "--safety", "NOPE")
     assert code == 1
-    assert f"{spec}: error[E504]: no process or composite named 'NOPE'" in err
+    assert f"{spec}: error[E0104]: no process or composite named 'NOPE'" in err
 
 
 def test_progress_is_no_longer_ignored(spec, capsys):

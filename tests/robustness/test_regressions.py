@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from iterplan_compiler import cli, frontend, limits
+from iterplan_compiler import cli, limits, pipeline
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fuzz  # noqa: E402 - the mutation engine shared with the long runs
@@ -104,7 +104,7 @@ def small_limits():
 def test_fuzz_parser_and_elaborator(small_limits, seed, r):
     name, text = seed
     mutated = fuzz.mutate_spec(text, random.Random(r))
-    model, diags = frontend.load(name, text=mutated)
+    model, diags = pipeline.load_model(name, text=mutated)
     if model is not None:
         for n in model.own_names():
             model.build_lts(n)

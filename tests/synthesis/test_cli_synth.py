@@ -42,7 +42,7 @@ def test_unrealizable_explained(tmp_path, capsys):
     text = SPEC.replace("controllable = {c, d}", "controllable = {c}")
     assert _run(tmp_path, text, "Ctrl", "--explain", "--solver", "explicit") == 1
     out = capsys.readouterr().out
-    assert "UNREALIZABLE" in out and "guarantee #1" in out
+    assert "UNREALIZABLE" in out and "keeps guarantee" in out and "false forever" in out
 
 
 def test_missing_file_is_a_diagnostic(tmp_path, capsys):

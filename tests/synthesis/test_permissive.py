@@ -14,10 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from synthesis_helpers import F, fl, problem
 
-from iterplan_compiler.frontend import load
 from iterplan_compiler.ir.formulas import Not
 from iterplan_compiler.ir.lts import LTS, make_lts, reachable
 from iterplan_compiler.ir.minimise import bisimilar
+from iterplan_compiler.pipeline import load_model as load
 from iterplan_compiler.synthesis.driver import synthesize
 from iterplan_compiler.synthesis.strategy import PERMISSIVE_PREFIX
 

@@ -1,4 +1,5 @@
-"""Brute-force explicit GR(1) solver for tiny slugsin specs (a correctness oracle).
+"""The explicit GR(1) solver — a test oracle for tiny slugsin specs (never used by the
+compiler; ``tests/gr1`` cross-check the one symbolic engine against it).
 
 Everything is enumerated: states are assignments to inputs and outputs, transitions are
 evaluated formula by formula, and the three-nested fixpoint runs on Python sets in its
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec
+from iterplan_compiler.ir.graphs import strongly_connected
 
 State = tuple[bool, ...]
 
@@ -77,6 +79,16 @@ def _live(game: ExplicitGame, expr: Expr | None, s: State, t: State) -> bool:
     return True if expr is None else evaluate(expr, game.asg(s), game.asg(t))
 
 
+def _target(g_val: dict[tuple[int, State, State], bool],
+            a_val: dict[tuple[int, State, State], bool], j: int, i: int, Z: set[State],
+            Y: set[State], X: set[State]) -> Callable[[State, State], bool]:
+    """The transition target ``(G_j ∧ Z') ∨ Y' ∨ (¬A_i ∧ X')`` as a predicate."""
+    def target(s: State, t: State) -> bool:
+        return (g_val[(j, s, t)] and t in Z) or t in Y or (not a_val[(i, s, t)] and t in X)
+
+    return target
+
+
 def solve_explicit(spec: SlugsSpec) -> tuple[bool, set[State]]:
     """Return ``(realizable, winning states)`` by brute force."""
     game = explicit_game(spec)
@@ -110,10 +122,7 @@ def solve_explicit(spec: SlugsSpec) -> tuple[bool, set[State]]:
                 for i in range(len(A)):
                     X = set(Z)
                     while True:
-                        Zc, Yc, Xc = Z, Y, X
-                        x_new = cpre(lambda s, t, j=j, i=i, Zc=Zc, Yc=Yc, Xc=Xc:
-                                     (g_val[(j, s, t)] and t in Zc) or t in Yc
-                                     or (not a_val[(i, s, t)] and t in Xc))
+                        x_new = cpre(_target(g_val, a_val, j, i, Z, Y, X))
                         if x_new == X:
                             break
                         X = x_new
@@ -188,8 +197,10 @@ def check_strategy(spec: SlugsSpec, strategy: Any) -> list[str]:
     for j, g in enumerate(G):
         keep = {(u, v) for u in edges for v in edges[u]
                 if not _live(game, g, *edge_state[(u, v)])}
-        for comp in _sccs(edges.keys(), lambda u, keep=keep: [v for v in edges[u]
-                                                               if (u, v) in keep]):
+        def kept_succ(u: tuple[State, int], keep: set[Any] = keep) -> list[tuple[State, int]]:
+            return [v for v in edges[u] if (u, v) in keep]
+
+        for comp in _sccs(edges.keys(), kept_succ):
             inner = [(u, v) for u in comp for v in edges[u] if v in comp and (u, v) in keep]
             if not inner:
                 continue
@@ -199,47 +210,6 @@ def check_strategy(spec: SlugsSpec, strategy: Any) -> list[str]:
 
 
 def _sccs(nodes: Iterable[Any], succ: Callable[[Any], list[Any]]) -> list[set[Any]]:
-    """Tarjan's SCCs (iterative)."""
-    index: dict[Any, int] = {}
-    low: dict[Any, int] = {}
-    on: set[Any] = set()
-    stack: list[Any] = []
-    out: list[set[Any]] = []
-    counter = 0
-    for root in nodes:
-        if root in index:
-            continue
-        work = [(root, iter(succ(root)))]
-        index[root] = low[root] = counter
-        counter += 1
-        stack.append(root)
-        on.add(root)
-        while work:
-            v, it = work[-1]
-            advanced = False
-            for w in it:
-                if w not in index:
-                    index[w] = low[w] = counter
-                    counter += 1
-                    stack.append(w)
-                    on.add(w)
-                    work.append((w, iter(succ(w))))
-                    advanced = True
-                    break
-                if w in on:
-                    low[v] = min(low[v], index[w])
-            if advanced:
-                continue
-            work.pop()
-            if work:
-                low[work[-1][0]] = min(low[work[-1][0]], low[v])
-            if low[v] == index[v]:
-                comp = set()
-                while True:
-                    w = stack.pop()
-                    on.discard(w)
-                    comp.add(w)
-                    if w == v:
-                        break
-                out.append(comp)
-    return out
+    """Tarjan's SCCs (:func:`~iterplan_compiler.ir.graphs.strongly_connected`)."""
+    return [set(c) for c in strongly_connected(nodes, succ)]
+

@@ -1,0 +1,70 @@
+"""The emit stage: a synthesised controller rendered as one of :class:`EmitKind`.
+
+``iterc compile --emit`` chooses the kind; :func:`canonical_controller` renumbers the
+controller first so generated files depend only on the machine, not on synthesis internals.
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+
+from iterplan_compiler.backends.graphviz import to_dot
+from iterplan_compiler.backends.jsonout import to_json
+from iterplan_compiler.backends.python import emit_module
+from iterplan_compiler.diagnostics import Span
+from iterplan_compiler.ir.fsp_print import lts_to_fsp
+from iterplan_compiler.ir.lts import LTS, reachable
+
+
+class _StrEnum(str, enum.Enum):
+    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self.value), spec)
+
+class EmitKind(_StrEnum):
+    """What ``iterc compile`` writes."""
+
+    PY = "py"      # a Python controller module (backends/python.py)
+    DOT = "dot"    # Graphviz (backends/graphviz.py)
+    FSP = "fsp"    # FSP text (ir/fsp_print.py)
+    JSON = "json"  # the controller table as JSON (backends/jsonout.py)
+
+
+#: ``--emit`` choices of ``iterc compile``.
+EMIT_KINDS = tuple(k.value for k in EmitKind)
+
+
+def spec_sha256(text: str) -> str:
+    """The sha256 hex digest of the spec text (UTF-8), as written into generated headers."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def canonical_controller(controller: LTS) -> LTS:
+    """Renumber ``controller`` canonically: breadth-first from the initial state (which becomes
+    0), successors in label order, unreachable states dropped.
+
+    For a deterministic controller the numbering then depends only on the machine, not on how
+    synthesis numbered its states, so generated modules and golden files stay stable when
+    synthesis internals change.  The result is isomorphic to the input when every state is
+    reachable (synthesis drops unreachable pairs).
+    """
+    return reachable(controller)
+
+
+def emit(kind: EmitKind, controller: LTS, controllable: frozenset[str], *, name: str,
+         source_name: str, spec_hash: str, origins: dict[str, Span] | None = None) -> str:
+    """Render a synthesised controller as ``kind``."""
+    if kind is EmitKind.PY:
+        return emit_module(controller, controllable=controllable, name=name,
+                           source_name=source_name, spec_hash=spec_hash, origins=origins)
+    if kind is EmitKind.DOT:
+        return to_dot(controller, controllable=controllable)
+    if kind is EmitKind.JSON:
+        return to_json(controller, controllable)
+    text = lts_to_fsp(controller)
+    return text if text.endswith("\n") else text + "\n"
