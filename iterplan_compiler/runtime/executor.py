@@ -38,10 +38,7 @@ charge: nothing is sent) or not flying.  Every event is logged with mission time
 from __future__ import annotations
 
 __all__ = ["Executor", "LogEntry", "MissionContext", "MissionEnd", "MissionResult", "RunConfig",
-           "ideal_distance", "load_controller"]
-
-# RunConfig, MissionContext, MissionEnd: runtime/mission.py; the summary: runtime/summary.py;
-# the fast skip: runtime/skip.py (re-exported here, the executor's public API)
+           "ideal_distance", "load_controller"]  # RunConfig, MissionContext, MissionEnd: mission.py
 
 import math
 import time
@@ -385,12 +382,9 @@ class Executor:
         ctx = self.ctx
         log = self.log
         log_limit = cfg.log_limit
-        delta = self.table.delta
-        controllable = self.table.controllable
-        choices = {s: sorted(a for a in m if a in controllable) for s, m in delta.items()}
+        choices = self._choices()
         progress_kinds = ("remove.next", "reset", "go.next")
-        skipping = cfg.fast_skip and cfg.choose is None and bool(self._skip_sensors.labels) \
-            and (on_event is None or cfg.on_event_labels is not None)
+        skipping = self._skipping()
         since = 0           # steps since the last wait or iterator progress (livelock guard)
         n = 0
         self._mark = perf()
@@ -452,6 +446,17 @@ class Executor:
                 continue
             self._wait_tick()
             since = 0
+
+    def _choices(self) -> dict[int, list[str]]:  # controllable labels per state, as tried
+        ctl = self.table.controllable
+        return {s: sorted(a for a in m if a in ctl) for s, m in self.table.delta.items()}
+
+    def _skipping(self) -> bool:
+        """Whether the fast skip may run (configured, no chooser, static next-sensors, and an
+        ``on_event`` hook, if any, that says which labels it needs)."""
+        cfg = self.cfg
+        return cfg.fast_skip and cfg.choose is None and bool(self._skip_sensors.labels) \
+            and (cfg.on_event is None or cfg.on_event_labels is not None)
 
     def _pass_done(self) -> bool:
         """An iterator pass was answered (``n.next``); True when the mission is complete."""
