@@ -33,7 +33,8 @@ from iterplan_compiler.runtime.executor import Executor, RunConfig  # noqa: E402
 from iterplan_compiler.runtime.grid import GridMap  # noqa: E402
 from iterplan_compiler.runtime.iterator import Iterator  # noqa: E402
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle  # noqa: E402
-from iterplan_compiler.runtime.sorter import Pose, make_sorter  # noqa: E402
+from iterplan_compiler.runtime.sorter import Pose  # noqa: E402
+from iterplan_compiler.runtime.sorters import make_sorter  # noqa: E402
 from tests.runtime.fire_patrol import TABLE  # noqa: E402
 
 
@@ -92,7 +93,7 @@ def full_executor(n: int, ideal: bool, observe=None) -> tuple[float, dict]:
 
 def tick_bound(passes: int, observe=None) -> tuple[float, dict]:
     """The 8x8 Fire Patrol example for ``passes`` passes: mostly physical ticks."""
-    from iterplan_compiler.runtime.grid import load_map
+    from iterplan_compiler.runtime.mapfile import load_map
 
     g = load_map(Path(__file__).resolve().parents[1] / "examples" / "fire_patrol.json")
     v = SimVehicle(SimParams(), home=g.home, heading=g.arrival_heading)
@@ -145,7 +146,7 @@ def with_view(grid_of, run):
 def view_comparison(n: int, passes: int, repeat: int, only: str = "") -> None:
     import statistics
 
-    from iterplan_compiler.runtime.grid import load_map
+    from iterplan_compiler.runtime.mapfile import load_map
 
     def big_grid():
         side = int(math.ceil(math.sqrt(n)))

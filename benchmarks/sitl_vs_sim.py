@@ -89,7 +89,8 @@ def launch_point(name: str, k: int = 0) -> tuple[str, str]:
     ``LAUNCH_OFFSETS[k]``, at the map's arrival heading, where the simulator takes off too.
     (SITL's default home is CMAC, the maps' SW corner, heading 353: a different first leg, and
     with it a different visiting order, would be compared.)"""
-    from iterplan_compiler.runtime.grid import load_map, math_to_compass
+    from iterplan_compiler.runtime.grid import math_to_compass
+    from iterplan_compiler.runtime.mapfile import load_map
 
     grid = load_map(ROOT / "examples" / f"{name}.json")
     dx, dy = LAUNCH_OFFSETS[k]

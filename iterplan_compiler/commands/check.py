@@ -22,7 +22,10 @@ from pathlib import Path
 
 from iterplan_compiler import pipeline
 from iterplan_compiler.commands.ltsa_checks import run_checks
-from iterplan_compiler.commands.semantic_checks import include_set_dependencies, labels_against_plants
+from iterplan_compiler.commands.semantic_checks import (
+    include_set_dependencies,
+    labels_against_plants,
+)
 from iterplan_compiler.diagnostics import has_errors, render
 from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.printer import print_spec

@@ -80,7 +80,8 @@ def _fly(module: Path, map_name: str, args):
     from iterplan_compiler.experiments.flight import fly
     from iterplan_compiler.experiments.missions import LogEvent
     from iterplan_compiler.experiments.pipeline import StageError
-    from iterplan_compiler.runtime.grid import MapError, load_map
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import load_map
 
     map_path = examples_dir() / map_name
     try:

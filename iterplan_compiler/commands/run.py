@@ -113,7 +113,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.runtime.bindings import BindingError, canon
     from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
-    from iterplan_compiler.runtime.grid import MapError, load_map
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import load_map
     from iterplan_compiler.runtime.parm import ParmError, read_parm
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
     from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs

@@ -41,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
 
     grid = None
     if args.map:
-        from iterplan_compiler.runtime.grid import MapError, load_map
+        from iterplan_compiler.runtime.grid import MapError
+        from iterplan_compiler.runtime.mapfile import load_map
         try:
             grid = load_map(args.map)
         except MapError as exc:

@@ -21,13 +21,25 @@ busy machine or parallel missions do not inflate it.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from iterplan_compiler.experiments.missions import LogEvent
 from iterplan_compiler.experiments.pipeline import StageError
+
+
+@dataclass(frozen=True)
+class LogEvent:
+    """One executed event: simulation time (s), label, current cell (-1 if none), pose."""
+
+    t: float
+    label: str
+    cell: int = -1
+    x: float = math.nan
+    y: float = math.nan
+
 
 #: Labels kept in the compact log (everything else only goes through the stop predicate).
 KEEP = frozenset({"has.next", "n.next", "go.next", "arrived", "take.photo", "store.target",
@@ -59,7 +71,8 @@ def example_bindings(grid, data: dict | None):
     (:func:`iterplan_compiler.runtime.bindings.map_rule_bindings`), so ``iterc run`` and the
     experiments fly the same thing.  Raises :class:`StageError` for malformed rules."""
     from iterplan_compiler.runtime.bindings import map_rule_bindings
-    from iterplan_compiler.runtime.grid import MapError, parse_sensor_rules
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import parse_sensor_rules
 
     if data is None:
         return map_rule_bindings(grid)

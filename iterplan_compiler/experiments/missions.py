@@ -17,24 +17,14 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
+from iterplan_compiler.experiments import flight
+from iterplan_compiler.experiments.flight import LogEvent
 from iterplan_compiler.experiments.stats import ideal_cover, ideal_patrol_loop
 from iterplan_compiler.experiments.sweeps import Case, case_map_data, layout
 
 EXAMPLE_OF = {"fig3b": "ordered_patrol", "fig3c": "cover", "fig3d": "cover"}
-
-
-@dataclass(frozen=True)
-class LogEvent:
-    """One executed event: simulation time (s), label, current cell (-1 if none), pose."""
-
-    t: float
-    label: str
-    cell: int = -1
-    x: float = math.nan
-    y: float = math.nan
 
 
 class MeasurementError(RuntimeError):
@@ -84,7 +74,7 @@ def build_grid(case: Case):
     """The case's GridMap (runtime), with exactly ``case.universe`` locations."""
     import numpy as np
 
-    from iterplan_compiler.runtime.grid import load_map
+    from iterplan_compiler.runtime.mapfile import load_map
 
     grid = load_map(data=case_map_data(case))
     grid.cells = np.arange(case.universe, dtype=np.int64)
@@ -207,7 +197,6 @@ class Runner:
         self.vehicle = vehicle
 
     def __call__(self, case: Case) -> dict:
-        from iterplan_compiler.experiments import flight
 
         name = EXAMPLE_OF[case.experiment]
         module = Path(self.ctrl_dir) / f"{name}_controller.py"

@@ -1,67 +1,38 @@
 """Spec -> generated controller module, for the demo, the experiments and the example tests.
 
-Each stage is imported lazily and a missing or failing stage comes back as a readable message
-(:class:`StageError`), never as a traceback: other parts of the toolkit may be absent in a
-partial build.
+Runs :func:`iterplan_compiler.pipeline.compile_spec` (every pass); a spec with errors, or a bug
+in a pass, comes back as a readable message (:class:`StageError`), never as a traceback.
 """
 
 from __future__ import annotations
 
-import importlib
 import importlib.util
 import sys
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import ModuleType
 
+from iterplan_compiler.diagnostics import Diagnostic, render
 from iterplan_compiler.experiments.catalog import EXAMPLES, example_path
+from iterplan_compiler.pipeline import compile_spec
 
 
 class StageError(RuntimeError):
-    """A pipeline stage is missing or reported errors; ``stage`` names it, the message says
-    what to do."""
+    """A pipeline stage reported errors or failed; ``stage`` names it, the message says what
+    to do."""
 
     def __init__(self, stage: str, message: str):
         self.stage = stage
         super().__init__(f"{stage}: {message}")
 
 
-def _render(diags, sources) -> str:
-    try:
-        from iterplan_compiler.diagnostics import render
-
-        return render(list(diags), sources)
-    except Exception:  # rendering is best effort; the codes and messages are what matter
-        return "\n".join(f"{getattr(d, 'code', '?')}: {getattr(d, 'message', d)}" for d in diags)
-
-
-#: (stage, module, attribute) that the compile pipeline needs.
-STAGES = (
-    ("front-end", "iterplan_compiler.frontend", "load"),
-    ("synthesis", "iterplan_compiler.synthesis.driver", "synthesize"),
-    ("back-end", "iterplan_compiler.backends.driver", "compile_spec"),
-)
-
-
-def missing_stage() -> StageError | None:
-    """The first pipeline stage that is not part of this build, if any."""
-    for stage, module, attr in STAGES:
-        try:
-            mod = importlib.import_module(module)
-        except ImportError as exc:
-            return StageError(stage, f"not available in this build ({exc})")
-        if not hasattr(mod, attr):
-            return StageError(stage, f"not available in this build ({module}.{attr} missing)")
-    return None
+def _render(diags: Iterable[Diagnostic], sources: Mapping[str, str]) -> str:
+    return render(list(diags), dict(sources))
 
 
 def compile_to_source(spec: Path, composite: str | None = None,
                       text: str | None = None) -> tuple[str, dict]:
     """Run front-end, synthesis and the Python back-end; return (module source, stats)."""
-    missing = missing_stage()
-    if missing is not None:
-        raise missing
-    from iterplan_compiler.backends.driver import compile_spec
-
     try:
         out = compile_spec(spec, composite=composite, text=text)
     except Exception as exc:  # a bug in another stage: report it, do not crash the caller

@@ -208,7 +208,8 @@ class Mission:
     def _fly(self) -> None:
         from iterplan_compiler.runtime.bindings import BindingError, canon
         from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
-        from iterplan_compiler.runtime.grid import MapError, load_map
+        from iterplan_compiler.runtime.grid import MapError
+        from iterplan_compiler.runtime.mapfile import load_map
         from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
         from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs
         from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError

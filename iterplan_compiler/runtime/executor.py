@@ -67,7 +67,8 @@ from iterplan_compiler.runtime.mission import MissionContext, MissionEnd, RunCon
 from iterplan_compiler.runtime.planner import MotionPlanner, admissible_headings
 from iterplan_compiler.runtime.results import LogEntry, MissionResult  # re-exported
 from iterplan_compiler.runtime.skip import Cycle, fast_skip, static_sensors
-from iterplan_compiler.runtime.sorter import Pose, make_sorter
+from iterplan_compiler.runtime.sorter import Pose
+from iterplan_compiler.runtime.sorters import make_sorter
 from iterplan_compiler.runtime.summary import mission_summary
 from iterplan_compiler.runtime.vehicle import (
     FAULTS,

@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -255,19 +254,3 @@ class GridMap:
         if name in self.sensors:
             mask[self.sensors[name]] = True
         return mask
-
-
-#: Names that live in :mod:`.mapfile` (map and cell-set files) and :mod:`.mapschema` (the map
-#: file's schema), importable from here as before the split.
-_MOVED = {"cells_from_geojson": "mapfile", "cells_from_text": "mapfile",
-          "parse_cell_name": "mapfile", "parse_sensor_rules": "mapfile", "load_map": "mapfile",
-          "json_path": "mapschema", "schema_error": "mapschema",
-          "validate_geojson": "mapschema", "MAX_ORIGIN_LAT": "mapschema"}
-
-
-def __getattr__(name: str) -> Any:
-    if name in _MOVED:
-        from iterplan_compiler.runtime import mapfile, mapschema
-
-        return getattr(mapfile if _MOVED[name] == "mapfile" else mapschema, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

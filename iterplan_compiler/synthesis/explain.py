@@ -28,8 +28,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from iterplan_compiler.ir.formulas import (
-    ActionProp, Always, And, Const, Eventually, FluentProp, Formula, Iff, Implies, Next, Not, Or,
-    Until, WeakUntil,
+    ActionProp,
+    Always,
+    And,
+    Const,
+    Eventually,
+    FluentProp,
+    Formula,
+    Iff,
+    Implies,
+    Next,
+    Not,
+    Or,
+    Until,
+    WeakUntil,
 )
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.synthesis.encode import GameSpec

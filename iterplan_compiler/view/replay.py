@@ -82,7 +82,7 @@ def load_run(run_dir: str | Path, grid: Any = None) -> dict:
 
     name_to_cell: dict[str, int] = {}
     if grid is not None:
-        from iterplan_compiler.runtime.grid import parse_cell_name
+        from iterplan_compiler.runtime.mapfile import parse_cell_name
         for e in events:
             if e[4] and e[4] not in name_to_cell:
                 try:

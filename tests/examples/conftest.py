@@ -25,7 +25,7 @@ class Compiled:
 
     @staticmethod
     def map(name: str):
-        from iterplan_compiler.runtime.grid import load_map
+        from iterplan_compiler.runtime.mapfile import load_map
 
         path = catalog.examples_dir() / catalog.EXAMPLES[name].map
         return load_map(path), json.loads(path.read_text())

@@ -30,13 +30,15 @@ def test_demo_end_to_end(tmp_path, capsys):
     assert (out / "fire_patrol_controller.py").read_text() == before
 
 
-def test_demo_reports_a_missing_stage_without_traceback(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(pipeline, "missing_stage",
-                        lambda: pipeline.StageError("synthesis", "not available in this build"))
+def test_demo_reports_a_failing_stage_without_traceback(tmp_path, capsys, monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("synthesis exploded")
+
+    monkeypatch.setattr(pipeline, "compile_spec", broken)
     rc = cli.main(["demo", "--out", str(tmp_path / "d")])
     err = capsys.readouterr().err
     assert rc == 1
-    assert "synthesis" in err and "Traceback" not in err
+    assert "synthesis exploded" in err and "Traceback" not in err
 
 
 def test_experiment_fig3c_quick(tmp_path, capsys):

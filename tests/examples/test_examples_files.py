@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from iterplan_compiler.experiments import catalog
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 
 ITERATOR_EXAMPLES = [e for e in catalog.EXAMPLES.values() if e.iterator]
 

@@ -9,7 +9,7 @@ import pytest
 
 from iterplan_compiler.runtime.controller import load_controller
 from iterplan_compiler.runtime.executor import Executor, RunConfig
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from iterplan_compiler.experiments import catalog, flight
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 
 from .behaviour import check_fire_patrol
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler.cli import main as iterc
-from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 from iterplan_compiler.gr1.slugsin import parse
 from iterplan_compiler.gr1.solve import SolverOptions, solve
+from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks" / "gr1"))

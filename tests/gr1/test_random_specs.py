@@ -9,10 +9,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from iterplan_compiler.diagnostics import NO_SPAN
-from iterplan_compiler.oracle.gr1_explicit import check_strategy, explicit_game, solve_explicit
 from iterplan_compiler.gr1.game import GameOptions
 from iterplan_compiler.gr1.slugsin import Expr, Line, SlugsSpec, parse, write
 from iterplan_compiler.gr1.solve import SolverOptions, solve
+from iterplan_compiler.oracle.gr1_explicit import check_strategy, explicit_game, solve_explicit
 
 
 def exprs(atoms: list[tuple[str, bool]], depth: int = 3):

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from iterplan_compiler.diagnostics import render
-from iterplan_compiler.oracle.gr1_explicit import evaluate
 from iterplan_compiler.gr1.slugsin import parse, to_prefix, variables_of, write
+from iterplan_compiler.oracle.gr1_explicit import evaluate
 
 SPEC = """# comment
 [INPUT]

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 
 from iterplan_compiler.diagnostics import render
 from iterplan_compiler.gr1 import slugsin, structured
-from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 from iterplan_compiler.gr1.solve import solve
+from iterplan_compiler.oracle.gr1_explicit import check_strategy, evaluate, solve_explicit
 
 
 def _solve(spec):

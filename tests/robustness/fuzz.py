@@ -190,7 +190,8 @@ def run_spec(name: str, text: str, workdir: str) -> str | None:
 
 
 def run_map(name: str, data, workdir: str) -> str | None:
-    from iterplan_compiler.runtime.grid import MapError, load_map
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import load_map
 
     path = os.path.join(workdir, "map.json")
     with open(path, "w") as f:

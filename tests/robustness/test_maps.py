@@ -11,7 +11,9 @@ from pathlib import Path
 import pytest
 
 from iterplan_compiler import cli
-from iterplan_compiler.runtime.grid import MAX_MAP_CELLS, MapError, json_path, load_map
+from iterplan_compiler.runtime.grid import MAX_MAP_CELLS, MapError
+from iterplan_compiler.runtime.mapfile import load_map
+from iterplan_compiler.runtime.mapschema import json_path
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = json.loads((REPO / "examples" / "fire_patrol.json").read_text())

@@ -114,7 +114,8 @@ def test_fuzz_parser_and_elaborator(small_limits, seed, r):
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(seed=st.sampled_from(MAP_SEEDS), r=st.integers(0, 2**32 - 1))
 def test_fuzz_map_loader(seed, r, tmp_path):
-    from iterplan_compiler.runtime.grid import MapError, load_map
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import load_map
 
     _name, data = seed
     mutated = fuzz.mutate_map(data, random.Random(r))

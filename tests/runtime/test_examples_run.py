@@ -14,11 +14,11 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.backends.driver import compile_spec
 from iterplan_compiler.cli import main
 from iterplan_compiler.experiments.catalog import examples_dir
 from iterplan_compiler.experiments.missions import LogEvent
-from iterplan_compiler.runtime.grid import load_map, parse_cell_name
+from iterplan_compiler.pipeline import compile_spec
+from iterplan_compiler.runtime.mapfile import load_map, parse_cell_name
 from tests.examples.behaviour import cells, check_cover, check_fire_patrol, check_ordered_patrol
 
 #: example -> extra `iterc run` flags (how long the mission is)

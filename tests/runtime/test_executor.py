@@ -9,7 +9,7 @@ import pytest
 from iterplan_compiler.runtime.bindings import BindingError, Bindings, canon
 from iterplan_compiler.runtime.controller import Controller, ControllerTable, run_bindings
 from iterplan_compiler.runtime.executor import Executor, RunConfig, ideal_distance, load_controller
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 from tests.runtime.fire_patrol import TABLE
 

@@ -10,11 +10,13 @@ from iterplan_compiler.runtime.grid import (
     GridMap,
     LocalFrame,
     MapError,
+    compass_to_math,
+    math_to_compass,
+)
+from iterplan_compiler.runtime.mapfile import (
     cells_from_geojson,
     cells_from_text,
-    compass_to_math,
     load_map,
-    math_to_compass,
     parse_cell_name,
 )
 

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from iterplan_compiler.runtime.iterator import Iterator
-from iterplan_compiler.runtime.sorter import Pose, Sorter, make_sorter
+from iterplan_compiler.runtime.sorter import Pose, Sorter
+from iterplan_compiler.runtime.sorters import make_sorter
 
 
 class KeySorter(Sorter):

@@ -13,8 +13,8 @@ import pytest
 
 from iterplan_compiler.cli import main
 from iterplan_compiler.runtime.executor import Executor, RunConfig
-from iterplan_compiler.runtime.grid import load_map
 from iterplan_compiler.runtime.loopback import LoopbackAutopilot
+from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkError, MavlinkVehicle, mav
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 from iterplan_compiler.runtime.vehicle import SafeAction, Start

@@ -15,8 +15,8 @@ import pytest
 
 from iterplan_compiler.mavproxy.link import ModuleLink
 from iterplan_compiler.mavproxy.mission import Mission, UsageError, parse_run
-from iterplan_compiler.runtime.grid import load_map
 from iterplan_compiler.runtime.loopback import LoopbackAutopilot
+from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.mavlink import mav, mavutil
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 

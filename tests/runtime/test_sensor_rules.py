@@ -11,13 +11,8 @@ import pytest
 from iterplan_compiler.cli import main
 from iterplan_compiler.runtime.bindings import Bindings, map_rule_bindings
 from iterplan_compiler.runtime.executor import Executor, RunConfig
-from iterplan_compiler.runtime.grid import (
-    DerivedSensor,
-    DynamicSensor,
-    MapError,
-    load_map,
-    parse_cell_name,
-)
+from iterplan_compiler.runtime.grid import DerivedSensor, DynamicSensor, MapError
+from iterplan_compiler.runtime.mapfile import load_map, parse_cell_name
 from iterplan_compiler.runtime.sim import SimVehicle
 from tests.runtime.fire_patrol import TABLE
 

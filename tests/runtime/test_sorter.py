@@ -13,8 +13,8 @@ from iterplan_compiler.runtime.sorter import (
     RandomSorter,
     dubins_lengths,
     fast_angle,
-    make_sorter,
 )
+from iterplan_compiler.runtime.sorters import make_sorter
 from tests.runtime.dubins_ref import csc_length, integrate, words
 
 coord = st.floats(-2000, 2000, allow_nan=False)

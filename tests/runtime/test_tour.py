@@ -19,7 +19,8 @@ from iterplan_compiler.experiments.sweeps import Case, layout
 from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
 from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
 from iterplan_compiler.runtime.sim import SimVehicle
-from iterplan_compiler.runtime.sorter import Pose, SorterKind, make_sorter
+from iterplan_compiler.runtime.sorter import Pose, SorterKind
+from iterplan_compiler.runtime.sorters import make_sorter
 from iterplan_compiler.runtime.tour import (
     TourSorter,
     _greedy,

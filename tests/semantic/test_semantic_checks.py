@@ -4,7 +4,6 @@ reported at the offending token, and good specs get no new diagnostics."""
 from __future__ import annotations
 
 import re
-import shutil
 from pathlib import Path
 
 import pytest

@@ -101,7 +101,7 @@ def log_events(res: dict, grid: Any) -> list:
     """events.csv as the LogEvents the example behaviour checks read: the cell of an
     ``arrived`` / ``take.photo`` / ``visited.*`` is the one the planner last arrived at."""
     from iterplan_compiler.experiments.missions import LogEvent
-    from iterplan_compiler.runtime.grid import parse_cell_name
+    from iterplan_compiler.runtime.mapfile import parse_cell_name
 
     out, here = [], -1
     for r in events(res):

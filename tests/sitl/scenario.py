@@ -25,7 +25,7 @@ from typing import Any
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402
 
-from iterplan_compiler.runtime.grid import load_map  # noqa: E402
+from iterplan_compiler.runtime.mapfile import load_map
 
 mav = mavutil.mavlink
 MODE_NAMES = dict(mavutil.mode_mapping_apm)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 from tests.examples.behaviour import check_fire_patrol
 from tests.sitl.harness import ROOT, log_events, run_scenario
 

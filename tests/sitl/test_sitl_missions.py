@@ -5,7 +5,7 @@ leaves the aircraft in the safe state (loitering over the map centre)."""
 
 import pytest
 
-from iterplan_compiler.runtime.grid import load_map
+from iterplan_compiler.runtime.mapfile import load_map
 from tests.examples.behaviour import cells, check_cover, check_fire_patrol, check_ordered_patrol
 from tests.sitl.conftest import EXAMPLES
 from tests.sitl.harness import describe, log_events, loiter_over, run_scenario

@@ -15,7 +15,8 @@ import pytest
 
 from iterplan_compiler.cli import main
 from iterplan_compiler.runtime.executor import Executor, RunConfig
-from iterplan_compiler.runtime.grid import GridMap, load_map
+from iterplan_compiler.runtime.grid import GridMap
+from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.sim import SimVehicle
 from iterplan_compiler.view import missing_dependency
 from iterplan_compiler.view.snapshot import Hub, Observer, map_message
