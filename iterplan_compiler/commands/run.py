@@ -17,10 +17,16 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from iterplan_compiler.runtime.runfiles import positive_float, sigterm_as_interrupt
+
+if TYPE_CHECKING:
+    from iterplan_compiler.runtime.controller import ControllerTable
+    from iterplan_compiler.runtime.executor import Executor, RunConfig
+    from iterplan_compiler.runtime.grid import GridMap
 
 HELP = "run a generated controller on the simulator or a MAVLink vehicle"
 
@@ -28,6 +34,16 @@ SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    _add_mission_arguments(parser)
+    _add_flight_arguments(parser)
+    _add_output_arguments(parser)
+    # -- live view (issue 16): --view, --realtime, --view-linger ---------------------------
+    from iterplan_compiler.view.cli import add_view_arguments
+    add_view_arguments(parser)
+
+
+def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
+    """The controller, map, vehicle and how the mission is ordered and ended."""
     parser.add_argument("controller", metavar="CONTROLLER.py",
                         help="controller module (from `iterc compile`)")
     parser.add_argument("--map", required=True, help="map file (JSON)")
@@ -68,6 +84,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-time", type=positive_float, default=4 * 3600.0, metavar="S",
                         help="end the run after S seconds of mission time or of wall time, "
                              "whichever comes first (default 4 h)")
+
+
+def _add_flight_arguments(parser: argparse.ArgumentParser) -> None:
+    """Path following, the airframe's figures and the simulator's calibration."""
     parser.add_argument("--planner", choices=("course", "carrot"), default=None,
                         help="path following: course hold or fly-to carrots "
                              "(default: course on sim, carrot on mavlink)")
@@ -86,6 +106,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="ArduPilot parameter file(s) for the simulator: calibrate it to "
                              "ArduPlane SITL with these parameters (AIRSPEED_CRUISE, "
                              "ROLL_LIMIT_DEG, WP_LOITER_RAD, ...)")
+
+
+def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """Safe states, readiness, wind and the output files."""
     parser.add_argument("--on-end", choices=SAFE_ACTIONS, default="loiter",
                         help="what to command when the mission completes or is interrupted "
                              "(Ctrl-C, SIGTERM): loiter over the map centre (default), rtl, "
@@ -105,43 +129,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="run-out", help="output directory")
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
     parser.add_argument("--quiet", action="store_true", help="no progress output")
-    # -- live view (issue 16): --view, --realtime, --view-linger ---------------------------
-    from iterplan_compiler.view.cli import add_view_arguments
-    add_view_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
-    from iterplan_compiler.runtime.bindings import BindingError, canon
-    from iterplan_compiler.runtime.executor import Executor, RunConfig, load_controller
-    from iterplan_compiler.runtime.grid import MapError
-    from iterplan_compiler.runtime.mapfile import load_map
-    from iterplan_compiler.runtime.parm import ParmError, read_parm
-    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
-    from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs
-    from iterplan_compiler.runtime.sorter import SorterKind
-    from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
+    from iterplan_compiler.runtime.bindings import BindingError
+    from iterplan_compiler.runtime.executor import Executor
+    from iterplan_compiler.runtime.runfiles import check_out, write_outputs
+    from iterplan_compiler.runtime.vehicle import VehicleError
 
     options = _options(args)
     if isinstance(options, str):
         return _usage(options)
     until, passes, wind = options
-    try:
-        table = load_controller(args.controller)
-    except ValueError as exc:
-        return _err(str(exc))
-    try:
-        grid = load_map(args.map)
-    except MapError as exc:
-        msg = str(exc)
-        return _err(msg if msg.startswith(str(args.map)) else f"{args.map}: {msg}")
-    if until is not None:
-        labels = {canon(a) for a in table.controllable | table.uncontrollable}
-        if until[0] not in labels:
-            return _usage(f"--until {until[0]}: the controller has no event of that name")
-    try:
-        params = read_parm(args.param)
-    except ParmError as exc:
-        return _err(str(exc))
+    inputs = _load_inputs(args, until)
+    if isinstance(inputs, int):
+        return inputs
+    table, grid, params = inputs
     out = Path(args.out)
     problem = check_out(out, [Path(args.controller), Path(args.map), *map(Path, args.param)])
     if problem:
@@ -163,23 +166,9 @@ def run(args: argparse.Namespace) -> int:
     with sigterm_as_interrupt():
         try:
             vehicle, mode = _vehicle(args, grid, params, wind, altitude, progress)
-            cfg = RunConfig(sorter=SorterKind(args.sorter),
-                            headings=ArrivalHeadings(args.headings),
-                            heading_choice=HeadingChoice(args.heading_choice),
-                            seed=args.seed, ideal_compute=args.ideal_compute,
-                            passes=passes, max_time=args.max_time, max_wall=args.max_time,
-                            planner_mode=mode, wind=wind_margin, altitude=altitude,
-                            turn_radius=args.turn_radius, start=Start(args.start),
-                            end_action=SafeAction(args.on_end),
-                            fault_action=SafeAction(args.on_fault),
-                            progress=progress, progress_every=60.0,
-                            on_event=until_hook(*until) if until else None,
-                            fast_skip=args.fast_skip,
-                            on_event_labels=frozenset(
-                                a for a in table.controllable | table.uncontrollable
-                                if until and canon(a) == until[0]),
-                            observe=view.observe if view else None,   # live view (issue 16)
-                            realtime=view_cli.realtime(args))
+            cfg = _run_config(args, table, until, passes, mode=mode, wind_margin=wind_margin,
+                              altitude=altitude, progress=progress,
+                              observe=view.observe if view else None)  # live view (issue 16)
             result = Executor(table, grid, vehicle, config=cfg).run()
         except KeyboardInterrupt:
             return _err("interrupted before the mission started; nothing was commanded")
@@ -194,6 +183,68 @@ def run(args: argparse.Namespace) -> int:
     _print_summary(result, out)
     view_cli.finish(view, args, interrupted=result.reason == "interrupted")  # issue 16
     return 0 if result.ok else 1
+
+
+def _load_inputs(args: argparse.Namespace, until: tuple[str, int] | None
+                 ) -> tuple[ControllerTable, GridMap, dict[str, float]] | int:
+    """``(table, grid, params)`` from the controller, map and parameter files, or the exit
+    code of the error (already reported)."""
+    from iterplan_compiler.runtime.bindings import canon
+    from iterplan_compiler.runtime.executor import load_controller
+    from iterplan_compiler.runtime.grid import MapError
+    from iterplan_compiler.runtime.mapfile import load_map
+    from iterplan_compiler.runtime.parm import ParmError, read_parm
+
+    try:
+        table = load_controller(args.controller)
+    except ValueError as exc:
+        return _err(str(exc))
+    try:
+        grid = load_map(args.map)
+    except MapError as exc:
+        msg = str(exc)
+        return _err(msg if msg.startswith(str(args.map)) else f"{args.map}: {msg}")
+    if until is not None:
+        labels = {canon(a) for a in table.controllable | table.uncontrollable}
+        if until[0] not in labels:
+            return _usage(f"--until {until[0]}: the controller has no event of that name")
+    try:
+        params = read_parm(args.param)
+    except ParmError as exc:
+        return _err(str(exc))
+    return table, grid, params
+
+
+def _run_config(args: argparse.Namespace, table: ControllerTable,
+                until: tuple[str, int] | None, passes: int, *, mode: str, wind_margin: float,
+                altitude: float, progress: Callable[[str], None] | None,
+                observe: Callable[[Executor, bool], None] | None) -> RunConfig:
+    """The executor's :class:`RunConfig` from the flags and what :func:`run` resolved."""
+    from iterplan_compiler.runtime.bindings import canon
+    from iterplan_compiler.runtime.executor import RunConfig
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
+    from iterplan_compiler.runtime.runfiles import until_hook
+    from iterplan_compiler.runtime.sorter import SorterKind
+    from iterplan_compiler.runtime.vehicle import SafeAction, Start
+    from iterplan_compiler.view import cli as view_cli
+
+    return RunConfig(sorter=SorterKind(args.sorter),
+                     headings=ArrivalHeadings(args.headings),
+                     heading_choice=HeadingChoice(args.heading_choice),
+                     seed=args.seed, ideal_compute=args.ideal_compute,
+                     passes=passes, max_time=args.max_time, max_wall=args.max_time,
+                     planner_mode=mode, wind=wind_margin, altitude=altitude,
+                     turn_radius=args.turn_radius, start=Start(args.start),
+                     end_action=SafeAction(args.on_end),
+                     fault_action=SafeAction(args.on_fault),
+                     progress=progress, progress_every=60.0,
+                     on_event=until_hook(*until) if until else None,
+                     fast_skip=args.fast_skip,
+                     on_event_labels=frozenset(
+                         a for a in table.controllable | table.uncontrollable
+                         if until and canon(a) == until[0]),
+                     observe=observe,
+                     realtime=view_cli.realtime(args))
 
 
 def _err(msg: str) -> int:

@@ -346,14 +346,9 @@ def _sift_after_build(bdd: Any, options: GameOptions, support_of: Any, xp: Seque
     return env_parts, env_pre, sys_parts, sys_pre
 
 
-def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
-               ) -> tuple[Game | None, list[Diagnostic]]:
-    """Build the BDDs of ``spec`` into the (fresh) manager ``bdd``.
-
-    Diagnostics: ``G201`` primed variable in an INIT section, ``G202`` ENV_TRANS mentions a
-    primed output (the environment cannot see the system's next move in slugs semantics).
-    """
-    options = options or GameOptions()
+def _check_primes(spec: SlugsSpec) -> list[Diagnostic]:
+    """``G201`` for a primed variable in an INIT section, ``G202`` for a primed output in
+    ENV_TRANS (in spec order)."""
     diags: list[Diagnostic] = []
     for sec in ("ENV_INIT", "SYS_INIT"):
         for line in spec.lines(sec):
@@ -366,6 +361,18 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
         if bad:
             diags.append(error("G202", "[ENV_TRANS] may not mention next-state outputs "
                                f"({', '.join(bad)})", line.span))
+    return diags
+
+
+def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
+               ) -> tuple[Game | None, list[Diagnostic]]:
+    """Build the BDDs of ``spec`` into the (fresh) manager ``bdd``.
+
+    Diagnostics: ``G201`` primed variable in an INIT section, ``G202`` ENV_TRANS mentions a
+    primed output (the environment cannot see the system's next move in slugs semantics).
+    """
+    options = options or GameOptions()
+    diags = _check_primes(spec)
     if diags:
         return None, diags
 

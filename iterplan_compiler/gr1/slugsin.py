@@ -134,6 +134,65 @@ def _tokens(text: str) -> list[tuple[str, int]]:
     return out
 
 
+def _buffer_count(toks: list[tuple[str, int]], pos: int, col: int) -> tuple[int, int]:
+    """The positive count after a ``$`` at ``col`` (``toks[pos]``) and the next position."""
+    if pos >= len(toks):
+        raise _ParseError("'$' needs a count", col)
+    ntok, ncol = toks[pos]
+    if not ntok.isdigit() or int(ntok) == 0:
+        raise _ParseError(f"'$' needs a positive count, got '{ntok}'", ncol, ncol + len(ntok))
+    return int(ntok), pos + 1
+
+
+def _buffer_ref(toks: list[tuple[str, int]], pos: int, col: int, buffers: list[list[Expr]]
+                ) -> tuple[Expr, int]:
+    """The innermost buffer's entry named by the index after a ``?`` at ``col``
+    (``toks[pos]``) and the next position."""
+    if pos >= len(toks):
+        raise _ParseError("'?' needs an index", col)
+    ktok, kcol = toks[pos]
+    if not ktok.isdigit():
+        raise _ParseError(f"'?' needs an index, got '{ktok}'", kcol, kcol + len(ktok))
+    if not buffers:
+        raise _ParseError("'?' outside of any '$' buffer", col)
+    k = int(ktok)
+    if k >= len(buffers[-1]):
+        raise _ParseError(
+            f"'? {k}' refers to buffer entry {k}, but only "
+            f"{len(buffers[-1])} entries are defined so far", col, kcol + len(ktok))
+    return buffers[-1][k], pos + 1
+
+
+def _variable(tok: str, col: int, known: set[str]) -> Expr:
+    """The (possibly primed) declared variable ``tok`` at ``col``."""
+    primed = tok.endswith("'")
+    name = tok[:-1] if primed else tok
+    if not name or "'" in name:
+        raise _ParseError(f"malformed variable name '{tok}'", col, col + len(tok))
+    if name not in known:
+        raise _ParseError(f"undeclared variable '{name}'", col, col + len(tok))
+    return Expr("var", name=name, primed=primed)
+
+
+def _reduce(node: Expr, stack: list[list], buffers: list[list[Expr]]) -> Expr | None:
+    """Feed the complete operand ``node`` to the open frames, closing every frame it
+    completes; the whole formula once the stack is empty, else None."""
+    while True:
+        if not stack:
+            return node
+        frame = stack[-1]
+        frame[2].append(node)
+        if len(frame[2]) < frame[1]:
+            return None
+        stack.pop()
+        kind = frame[0]
+        if kind == "buf":
+            buffers.pop()
+            node = frame[2][-1]
+        else:
+            node = Expr(kind, args=tuple(frame[2]))
+
+
 def _parse_formula(toks: list[tuple[str, int]], known: set[str]) -> Expr:
     """Parse one prefix formula that must consume all of ``toks``.
 
@@ -164,57 +223,16 @@ def _parse_formula(toks: list[tuple[str, int]], known: set[str]) -> Expr:
         elif tok == "0":
             node = FALSE
         elif tok == "$":
-            if pos >= len(toks):
-                raise _ParseError("'$' needs a count", col)
-            ntok, ncol = toks[pos]
-            pos += 1
-            if not ntok.isdigit() or int(ntok) == 0:
-                raise _ParseError(f"'$' needs a positive count, got '{ntok}'", ncol,
-                                  ncol + len(ntok))
+            count, pos = _buffer_count(toks, pos, col)
             buf: list[Expr] = []
             buffers.append(buf)
-            stack.append(["buf", int(ntok), buf, col])
+            stack.append(["buf", count, buf, col])
         elif tok == "?":
-            if pos >= len(toks):
-                raise _ParseError("'?' needs an index", col)
-            ktok, kcol = toks[pos]
-            pos += 1
-            if not ktok.isdigit():
-                raise _ParseError(f"'?' needs an index, got '{ktok}'", kcol, kcol + len(ktok))
-            if not buffers:
-                raise _ParseError("'?' outside of any '$' buffer", col)
-            k = int(ktok)
-            if k >= len(buffers[-1]):
-                raise _ParseError(
-                    f"'? {k}' refers to buffer entry {k}, but only "
-                    f"{len(buffers[-1])} entries are defined so far", col, kcol + len(ktok))
-            node = buffers[-1][k]
+            node, pos = _buffer_ref(toks, pos, col, buffers)
         else:
-            primed = tok.endswith("'")
-            name = tok[:-1] if primed else tok
-            if not name or "'" in name:
-                raise _ParseError(f"malformed variable name '{tok}'", col, col + len(tok))
-            if name not in known:
-                raise _ParseError(f"undeclared variable '{name}'", col, col + len(tok))
-            node = Expr("var", name=name, primed=primed)
-        # reduce
-        while node is not None:
-            if not stack:
-                result = node
-                node = None
-                break
-            frame = stack[-1]
-            frame[2].append(node)
-            if len(frame[2]) < frame[1]:
-                node = None
-                break
-            stack.pop()
-            kind = frame[0]
-            if kind == "buf":
-                buffers.pop()
-                node = frame[2][-1]
-            else:
-                node = Expr(kind, args=tuple(frame[2]))
+            node = _variable(tok, col, known)
+        if node is not None:
+            result = _reduce(node, stack, buffers)
         if result is not None:
             break
     if pos < len(toks):

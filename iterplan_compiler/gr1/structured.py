@@ -29,7 +29,7 @@ undeclared variable, ``G114`` term too large.  The reader never raises for bad i
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.gr1 import slugsin
@@ -362,6 +362,70 @@ def _parse_sections(raw: dict[str, list[tuple[int, str]]], sections: dict[str, l
             sections[sec].append(Line(expr, Span(path, lineno, col0)))
 
 
+@dataclass
+class _Decls:
+    """The declarations read so far (filled in by :func:`_declare`)."""
+
+    inputs: list[str] = field(default_factory=list)
+    outputs: list[str] = field(default_factory=list)
+    bools: set[str] = field(default_factory=set)
+    ints: dict[str, IntVar] = field(default_factory=dict)
+    owner: dict[str, str] = field(default_factory=dict)  # integer variable -> "ENV" | "SYS"
+    decl_span: dict[str, Span] = field(default_factory=dict)
+
+
+def _declare(decls: _Decls, stripped: str, section: str, sp: Span,
+             diags: list[Diagnostic]) -> None:
+    """Record the declaration ``stripped`` of an INPUT/OUTPUT ``section`` (G111, G114)."""
+    m = _DECL.match(stripped)
+    if m is None:
+        diags.append(error("G111", f"bad declaration '{stripped}' (expected 'name' or "
+                           "'name: lo...hi')", sp))
+        return
+    name = m.group(1)
+    if name in ("TRUE", "FALSE"):
+        diags.append(error("G111", f"'{name}' is reserved", sp))
+        return
+    if name in decls.decl_span:
+        diags.append(error("G111", f"variable '{name}' declared twice", sp))
+        return
+    decls.decl_span[name] = sp
+    names = decls.inputs if section == "INPUT" else decls.outputs
+    if m.group(2) is None:
+        decls.bools.add(name)
+        names.append(name)
+        return
+    lo, hi = int(m.group(2)), int(m.group(3))
+    if lo > hi:
+        diags.append(error("G111", f"empty range {lo}...{hi} for '{name}'", sp))
+        return
+    if hi - lo + 1 > MAX_TERM_VALUES:
+        diags.append(error("G114", f"range of '{name}' has {hi - lo + 1} values "
+                           f"(limit {MAX_TERM_VALUES})", sp))
+        return
+    var = _int_var(name, lo, hi)
+    decls.ints[name] = var
+    decls.owner[name] = "ENV" if section == "INPUT" else "SYS"
+    names.extend(var.bits)
+
+
+def _range_lines(decls: _Decls) -> dict[str, list[Line]]:
+    """Sections holding only the range constraints of the integer variables whose range
+    does not fill their bits (INIT and TRANS of the owner)."""
+    # Bit names must not collide with declared Boolean names (e.g. a Boolean called 'x@0'
+    # cannot be declared, since '@' is not allowed in names, so this cannot happen).
+    sections: dict[str, list[Line]] = {s: [] for s in FORMULA_SECTIONS}
+    for name, var in decls.ints.items():
+        size = var.hi - var.lo + 1
+        if size == 1 << len(var.bits):
+            continue
+        sp = decls.decl_span[name]
+        who = decls.owner[name]
+        sections[f"{who}_INIT"].append(Line(_at_most(var, size - 1, False), sp))
+        sections[f"{who}_TRANS"].append(Line(_at_most(var, size - 1, True), sp))
+    return sections
+
+
 def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Diagnostic]]:
     """Parse structuredslugs ``text`` into an equivalent Boolean :class:`SlugsSpec`.
 
@@ -371,12 +435,7 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
     """
     diags: list[Diagnostic] = []
     section: str | None = None
-    inputs: list[str] = []
-    outputs: list[str] = []
-    bools: set[str] = set()
-    ints: dict[str, IntVar] = {}
-    owner: dict[str, str] = {}  # integer variable -> "ENV" | "SYS"
-    decl_span: dict[str, Span] = {}
+    decls = _Decls()
     raw: dict[str, list[tuple[int, str]]] = {s: [] for s in FORMULA_SECTIONS}
     for lineno, line in enumerate(text.splitlines(), start=1):
         stripped = line.strip()
@@ -398,54 +457,15 @@ def parse(text: str, path: str = "<string>") -> tuple[SlugsSpec | None, list[Dia
                                    Span(path, lineno, col0)))
             continue
         if section in ("INPUT", "OUTPUT"):
-            sp = Span(path, lineno, col0, lineno, col0 + len(stripped))
-            m = _DECL.match(stripped)
-            if m is None:
-                diags.append(error("G111", f"bad declaration '{stripped}' (expected 'name' or "
-                                   "'name: lo...hi')", sp))
-                continue
-            name = m.group(1)
-            if name in ("TRUE", "FALSE"):
-                diags.append(error("G111", f"'{name}' is reserved", sp))
-                continue
-            if name in decl_span:
-                diags.append(error("G111", f"variable '{name}' declared twice", sp))
-                continue
-            decl_span[name] = sp
-            names = inputs if section == "INPUT" else outputs
-            if m.group(2) is None:
-                bools.add(name)
-                names.append(name)
-                continue
-            lo, hi = int(m.group(2)), int(m.group(3))
-            if lo > hi:
-                diags.append(error("G111", f"empty range {lo}...{hi} for '{name}'", sp))
-                continue
-            if hi - lo + 1 > MAX_TERM_VALUES:
-                diags.append(error("G114", f"range of '{name}' has {hi - lo + 1} values "
-                                   f"(limit {MAX_TERM_VALUES})", sp))
-                continue
-            var = _int_var(name, lo, hi)
-            ints[name] = var
-            owner[name] = "ENV" if section == "INPUT" else "SYS"
-            names.extend(var.bits)
+            _declare(decls, stripped, section,
+                     Span(path, lineno, col0, lineno, col0 + len(stripped)), diags)
             continue
         raw[section].append((lineno, line))
-    # Bit names must not collide with declared Boolean names (e.g. a Boolean called 'x@0'
-    # cannot be declared, since '@' is not allowed in names, so this cannot happen).
-    sections: dict[str, list[Line]] = {s: [] for s in FORMULA_SECTIONS}
-    for name, var in ints.items():
-        size = var.hi - var.lo + 1
-        if size == 1 << len(var.bits):
-            continue
-        sp = decl_span[name]
-        who = owner[name]
-        sections[f"{who}_INIT"].append(Line(_at_most(var, size - 1, False), sp))
-        sections[f"{who}_TRANS"].append(Line(_at_most(var, size - 1, True), sp))
-    _parse_sections(raw, sections, bools, ints, path, diags)
+    sections = _range_lines(decls)
+    _parse_sections(raw, sections, decls.bools, decls.ints, path, diags)
     if any(d.is_error for d in diags):
         return None, diags
-    return SlugsSpec(tuple(inputs), tuple(outputs),
+    return SlugsSpec(tuple(decls.inputs), tuple(decls.outputs),
                      {s: tuple(v) for s, v in sections.items()}, path), diags
 
 
