@@ -8,7 +8,9 @@ counterexample it finds should become an explicit regression test.
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 
 from hypothesis import settings
@@ -18,6 +20,7 @@ from hypothesis import settings
 # never reads an entry written by other code, and the user's ~/.cache is left alone.
 if "ITERPLAN_TEST_KEEP_CACHE" not in os.environ:
     os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="iterplan-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["XDG_CACHE_HOME"], ignore_errors=True)
 
 settings.register_profile("default", derandomize=True, deadline=None, print_blob=True)
 settings.register_profile("explore", derandomize=False, deadline=None, max_examples=500)
