@@ -11,8 +11,6 @@ so the test stays well under 20 s.
 
 from __future__ import annotations
 
-import re
-
 import pytest
 from cli_helpers import CORPUS, EXAMPLES, GOLDEN_SPEC
 from hypothesis import HealthCheck, given, settings
@@ -20,10 +18,9 @@ from hypothesis import strategies as st
 
 from iterplan_compiler import pipeline
 from iterplan_compiler.diagnostics import render
+from tests.robustness.fuzz import mutate as shared_mutate
 
 SYNTHESIS_KEYWORDS = {"controller", "heuristic", "monolithicDirector"}
-# Identifiers, numbers, multi-character operators, any other character, runs of blanks.
-TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*|\d+|\.\.|->|\|\||<->|&&|[^\sA-Za-z0-9_]|\s+")
 # Fragments worth inserting: delimiters, keywords, odd characters, large/negative numbers.
 EXTRA = ["(", ")", "{", "}", "[", "]", ".", ",", "|", "||", "->", "~", "\\", "@", "/", "'",
          '"', "\x00", "\ufffd", "é", "0..2", "-1", "99999", "if", "then", "else", "when",
@@ -47,31 +44,9 @@ SEEDS = _seeds()
 
 
 def mutate(text: str, ops: list[tuple[int, int, int, int]]) -> str:
-    """Apply ``(op, i, j, k)`` edits to the token list of ``text`` (indices taken modulo)."""
-    toks = TOKEN.findall(text)
-    for op, i, j, k in ops:
-        if not toks:
-            toks = [EXTRA[k % len(EXTRA)]]
-            continue
-        i %= len(toks)
-        j %= len(toks)
-        if op == 0:
-            del toks[i]
-        elif op == 1:
-            toks.insert(i, toks[i])
-        elif op == 2:
-            toks[i], toks[j] = toks[j], toks[i]
-        elif op == 3:
-            toks[i] = toks[j]
-        elif op == 4:
-            toks.insert(i, EXTRA[k % len(EXTRA)])
-        elif op == 5 and toks[i]:  # character level: drop one character of a token
-            s = toks[i]
-            toks[i] = s[: k % len(s)] + s[k % len(s) + 1:]
-        else:  # character level: duplicate one character
-            s = toks[i] or " "
-            toks[i] = s[: k % len(s)] + s[k % len(s)] + s[k % len(s):]
-    return "".join(toks)
+    """Apply ``(op, i, j, k)`` edits (:func:`tests.robustness.fuzz.mutate`; ops 0-6: token
+    and character edits, with this test's fragments)."""
+    return shared_mutate(text, ops, EXTRA)
 
 
 def exercise(path: str, text: str) -> None:

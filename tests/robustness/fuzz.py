@@ -64,12 +64,19 @@ def spec_seeds() -> list[tuple[str, str]]:
     return [(p.name, p.read_text(encoding="utf-8", errors="replace")) for p in paths]
 
 
-def mutate_spec(text: str, rng: random.Random) -> str:
-    toks = TOKEN.findall(text) or [""]
-    for _ in range(rng.randint(1, 4)):
-        op = rng.randrange(8)
-        i, j = rng.randrange(len(toks)), rng.randrange(len(toks))
-        if op == 0 and len(toks) > 1:
+def mutate(text: str, ops: list[tuple[int, int, int, int]], extra: list[str] = EXTRA) -> str:
+    """Apply ``(op, i, j, k)`` edits to the token list of ``text`` (indices taken modulo):
+    0 delete, 1 duplicate, 2 swap, 3 overwrite a token, 4 insert a fragment of ``extra``,
+    5 drop / 6 duplicate one character, 7 duplicate a whole line elsewhere (declarations,
+    nesting).  Shared with the hypothesis fuzz test (tests/cli/test_cli_fuzz.py)."""
+    toks = TOKEN.findall(text)
+    for op, i, j, k in ops:
+        if not toks:
+            toks = [extra[k % len(extra)]]
+            continue
+        i %= len(toks)
+        j %= len(toks)
+        if op == 0:
             del toks[i]
         elif op == 1:
             toks.insert(i, toks[i])
@@ -78,19 +85,26 @@ def mutate_spec(text: str, rng: random.Random) -> str:
         elif op == 3:
             toks[i] = toks[j]
         elif op == 4:
-            toks.insert(i, rng.choice(EXTRA))
+            toks.insert(i, extra[k % len(extra)])
         elif op == 5 and toks[i]:
-            k = rng.randrange(len(toks[i]))
-            toks[i] = toks[i][:k] + toks[i][k + 1:]
-        elif op == 6:
-            s = toks[i] or " "
-            k = rng.randrange(len(s))
-            toks[i] = s[:k] + s[k] + s[k:]
-        else:  # a whole line duplicated elsewhere (declarations, nesting)
+            s = toks[i]
+            toks[i] = s[: k % len(s)] + s[k % len(s) + 1:]
+        elif op == 7:
             lines = "".join(toks).splitlines(keepends=True) or [""]
-            lines.insert(rng.randrange(len(lines) + 1), rng.choice(lines))
-            toks = TOKEN.findall("".join(lines)) or [""]
+            lines.insert(k % (len(lines) + 1), lines[i % len(lines)])
+            toks = TOKEN.findall("".join(lines))
+        else:
+            s = toks[i] or " "
+            toks[i] = s[: k % len(s)] + s[k % len(s)] + s[k % len(s):]
     return "".join(toks)
+
+
+def mutate_spec(text: str, rng: random.Random) -> str:
+    """1-4 random edits of :func:`mutate`."""
+    big = 1 << 30
+    ops = [(rng.randrange(8), rng.randrange(big), rng.randrange(big), rng.randrange(big))
+           for _ in range(rng.randint(1, 4))]
+    return mutate(text, ops)
 
 
 def map_seeds() -> list[tuple[str, object]]:
