@@ -61,6 +61,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fast-skip", action="store_true",
                         help="fig3b: the runtime's fast skip of the controller's skip cycles "
                              "(same controller behaviour, less iteration overhead)")
+    parser.add_argument("--headings", choices=("parallel", "grid"), default=None,
+                        help="admissible arrival headings for every sorter (default: the "
+                             "paper's, parallel to the map's direction; tour on Cover: its "
+                             "planned ones)")
+    parser.add_argument("--heading-choice", choices=("shortest", "lookahead", "repeat"),
+                        default=None,
+                        help="arrival heading per leg for every sorter (default: the "
+                             "paper's shortest; tour on Cover: lookahead); repeat: the heading "
+                             "that also shortens the legs that followed this location the last "
+                             "time (a patrol's loop, learnt by watching)")
+    parser.add_argument("--warmup", type=int, default=0, metavar="LOOPS",
+                        help="fig3b: patrol loops flown before the measured ones (default 0: "
+                             "the paper's, the first loop is measured)")
     parser.add_argument("--fresh", action="store_true",
                         help="ignore the runs saved by an interrupted sweep (<exp>.partial.csv)"
                         " and start over")
@@ -79,6 +92,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"iterc experiment: unknown sorter(s) {', '.join(bad)}; choose from "
                   f"{', '.join(sweeps.SORTERS)}", file=sys.stderr)
             return 2
+    if args.warmup < 0:
+        print("iterc experiment: --warmup must be at least 0", file=sys.stderr)
+        return 2
     if args.seeds is not None and args.seeds < 1:
         print("iterc experiment: --seeds must be at least 1", file=sys.stderr)
         return 2
@@ -104,6 +120,17 @@ def run(args: argparse.Namespace) -> int:
     return status
 
 
+def _arrival(args: argparse.Namespace):
+    """(ArrivalHeadings, HeadingChoice) from --headings / --heading-choice, or None (the
+    per-sorter defaults of ``missions.arrival_for``)."""
+    if args.headings is None and args.heading_choice is None:
+        return None
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
+
+    return (ArrivalHeadings(args.headings or "parallel"),
+            HeadingChoice(args.heading_choice or "shortest"))
+
+
 def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     from iterplan_compiler.experiments import missions, plots
 
@@ -120,11 +147,13 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
     runner = missions.Runner(str(out / "controllers"), fast_skip=args.fast_skip,
-                             vehicle=missions.VehicleKind(args.vehicle))
+                             vehicle=missions.VehicleKind(args.vehicle),
+                             arrival=_arrival(args), warmup=args.warmup)
     # Each finished run is appended to <name>.partial.csv at once (one fsync-ed line), so a
     # sweep killed after hours resumes where it stopped: runs already in the file are kept.
     partial = out / f"{name}.partial.csv"
-    fields = harness.CASE_FIELDS + harness.RESULT_FIELDS + ["floor", "physics_pct"]
+    fields = harness.CASE_FIELDS + harness.RESULT_FIELDS + ["floor", "physics_pct",
+                                                           "first_loop", "warmup"]
     final = out / f"{name}.csv"
     done_rows = [] if args.fresh else _resumable_rows(partial, fields) + \
         _finished_rows(final, fields)
@@ -186,7 +215,11 @@ def _finished_rows(final: Path, fields: list[str]) -> list[dict]:
     if not final.exists():
         return []
     rows = list(csv.DictReader(io.StringIO(final.read_text(encoding="utf-8"))))
-    if rows and not set(fields) <= set(rows[0].keys()):
+    from iterplan_compiler.experiments import harness
+
+    # Columns added since (e.g. first_loop) may be missing: the case and its result suffice.
+    needed = [f for f in fields if f in harness.CASE_FIELDS or f in harness.RESULT_FIELDS]
+    if rows and not set(needed) <= set(rows[0].keys()):
         return []
     return rows
 

@@ -61,11 +61,12 @@ def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--headings", choices=("parallel", "grid"), default="parallel",
                         help="admissible arrival headings: parallel to the map's direction "
                              "(the paper's), or along either grid axis")
-    parser.add_argument("--heading-choice", choices=("shortest", "lookahead"),
+    parser.add_argument("--heading-choice", choices=("shortest", "lookahead", "repeat"),
                         default="shortest",
-                        help="arrival heading per leg: the shortest path (the paper's) or the "
+                        help="arrival heading per leg: the shortest path (the paper's), the "
                              "one that also shortens the next leg (the tour's planned heading "
-                             "with --sorter tour)")
+                             "with --sorter tour), or repeat: the one that also shortens the "
+                             "legs that followed this location the last time (patrols)")
     parser.add_argument("--seed", type=int, default=0, help="seed for the random sorter and sim")
     parser.add_argument("--ideal-compute", action="store_true",
                         help="do not charge planning compute time to the simulated clock")

@@ -180,6 +180,9 @@ class Point:
     #: the kinematic floor over the ideal (%): what the turn radius costs at least
     physics_pct: float = math.nan
     physics_err3: float = math.nan
+    #: fig3b: the first patrol loop's overhead (%), when loops after a warm-up are measured
+    first_loop_pct: float = math.nan
+    first_loop_err3: float = math.nan
 
 
 def aggregate(rows: Iterable[dict]) -> list[Point]:
@@ -195,10 +198,13 @@ def aggregate(rows: Iterable[dict]) -> list[Point]:
         o = summarize(float(r["overhead_pct"]) for r in ok)
         ideal = summarize(float(r["ideal"]) for r in ok).mean
         ph = summarize(_num(r.get("physics_pct")) for r in ok)
+        first = summarize(100.0 * (_num(r.get("first_loop")) - float(r["ideal"]))
+                          / float(r["ideal"]) for r in ok)
         points.append(Point(key[0], key[1], key[2], key[3], n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
                             overhead_pct=o.mean, overhead_err3=o.err3,
                             failed=len(rs) - len(ok), physics_pct=ph.mean,
-                            physics_err3=ph.err3))
+                            physics_err3=ph.err3, first_loop_pct=first.mean,
+                            first_loop_err3=first.err3))
     return points
 
 

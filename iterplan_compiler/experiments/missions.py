@@ -52,16 +52,18 @@ def cover_time(log: Sequence[LogEvent], region: Iterable[int]) -> tuple[float, L
     raise MeasurementError(f"{len(todo)} region cell(s) never visited")
 
 
-def measure(case: Case, log: Sequence[LogEvent], grid, speed: float) -> dict:
-    """The case's duration and ideal from its event log."""
+def measure(case: Case, log: Sequence[LogEvent], grid, speed: float, warmup: int = 0) -> dict:
+    """The case's duration and ideal from its event log.  Patrol: the mean of ``case.loops``
+    loops after ``warmup`` loops (the first loop carries the approach from the launch: the
+    arrival pose at p.0 is the launch leg's); ``first_loop`` is the first loop's time."""
     if case.experiment == "fig3b":
         loops = loop_times(log)
-        if len(loops) < case.loops:
+        if len(loops) < warmup + case.loops:
             raise MeasurementError(f"only {len(loops)} complete patrol loop(s) in the log")
         points = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
-        dur = sum(loops[: case.loops]) / case.loops
+        dur = sum(loops[warmup: warmup + case.loops]) / case.loops
         return {"duration": dur, "ideal": ideal_patrol_loop(points, speed),
-                "events": len(log)}
+                "events": len(log), "first_loop": loops[0], "warmup": warmup}
     region = [int(c) for c in grid.sensors["cover"]]
     dur, start = cover_time(log, region)
     centres = [grid.centre(c) for c in region]
@@ -86,9 +88,9 @@ class StopWhen:
     p.0; Cover stops once every region cell has been arrived at (or after a full pass of the
     iterator, ``n.next``, which means some region cell was skipped)."""
 
-    def __init__(self, case: Case, grid):
+    def __init__(self, case: Case, grid, warmup: int = 0):
         self.patrol = case.experiment == "fig3b"
-        self.needed = case.loops + 1
+        self.needed = warmup + case.loops + 1
         self.seen = 0
         self.todo = set() if self.patrol else {int(c) for c in grid.sensors["cover"]}
 
@@ -118,7 +120,7 @@ def preflight(experiment: str, ctrl_dir: Path) -> str | None:
     return None
 
 
-def kinematic_floor_s(case: Case, res, grid, radius: float) -> float:
+def kinematic_floor_s(case: Case, res, grid, radius: float, headings=None) -> float:
     """The measurement's kinematic floor (s): what the same mission costs at least with the
     turn radius (runtime/ideal.py).  Patrol: the periodic loop through the patrol cells in
     order; Cover: from the pose at the first ``has.next``, the shorter of the order flown and
@@ -134,7 +136,7 @@ def kinematic_floor_s(case: Case, res, grid, radius: float) -> float:
     if case.experiment == "fig3b":
         pts = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
         return kinematic_floor(pts, list(range(len(pts))), None, h, radius,
-                               closed=True) / res.speed
+                               closed=True, headings=headings) / res.speed
     region = {int(c) for c in grid.sensors["cover"]}
     start = next(e for e in res.log if e.label == "has.next")
     tr = np.asarray(res.track, dtype=np.float64).reshape(-1, 3)
@@ -191,10 +193,14 @@ class Runner:
     """Picklable case runner for :func:`harness.run_cases` (imports lazily in the worker)."""
 
     def __init__(self, ctrl_dir: str, fast_skip: bool = False,
-                 vehicle: VehicleKind = VehicleKind.SITL):
+                 vehicle: VehicleKind = VehicleKind.SITL, arrival=None, warmup: int = 0):
         self.ctrl_dir = ctrl_dir
         self.fast_skip = fast_skip
         self.vehicle = vehicle
+        #: (ArrivalHeadings, HeadingChoice) for every sorter, or None: :func:`arrival_for`
+        self.arrival = arrival
+        #: fig3b: patrol loops flown before the measured ones
+        self.warmup = warmup
 
     def __call__(self, case: Case) -> dict:
 
@@ -203,17 +209,22 @@ class Runner:
         grid = build_grid(case)
         # Fast skip where the measurement allows it: the patrol loop time needs only the
         # visited.p.0 events; the cover time starts at the first has.next, a skipped event.
+        from iterplan_compiler.runtime.planner import admissible_headings
+
+        arrival = self.arrival or arrival_for(case.sorter, case.experiment)
+        warmup = self.warmup if case.experiment == "fig3b" else 0
         res = flight.fly(module, grid, sorter=case.sorter, seed=case.seed,
-                         stop=StopWhen(case, grid),
+                         stop=StopWhen(case, grid, warmup),
                          fast_skip=self.fast_skip and case.experiment == "fig3b",
                          heading=layout(case).heading, params=sim_params(self.vehicle),
-                         arrival=arrival_for(case.sorter, case.experiment))
+                         arrival=arrival)
         if not res.ok:
             raise MeasurementError(f"mission ended early: {res.reason}")
-        out = measure(case, res.log, grid, res.speed)
+        out = measure(case, res.log, grid, res.speed, warmup)
         out["compute_s"] = float(res.summary.get("compute_s", 0.0) or 0.0)
         out["steps"] = int(res.summary.get("steps", 0) or 0)
         out["turn_radius"] = float(res.summary.get("turn_radius_m", 0.0) or 0.0)
-        out["floor"] = kinematic_floor_s(case, res, grid, out["turn_radius"])
+        heads = admissible_headings(grid.arrival_heading, True, arrival[0])
+        out["floor"] = kinematic_floor_s(case, res, grid, out["turn_radius"], heads)
         out["physics_pct"] = 100.0 * (out["floor"] - out["ideal"]) / out["ideal"]
         return out

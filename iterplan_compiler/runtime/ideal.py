@@ -198,17 +198,22 @@ def ideal_path(points: Sequence[Point] | np.ndarray, start: Point | None = None,
 
 def kinematic_floor(points: Sequence[Point] | np.ndarray, order: Sequence[int],
                     start: Pose | None, arrival_heading: float, radius: float, *,
-                    parallel: bool = True, closed: bool = False) -> float:
+                    parallel: bool = True, closed: bool = False,
+                    headings: Sequence[float] | None = None) -> float:
     """Shortest length of the CSC path through ``points`` in ``order`` (from the ``start``
     pose; ``closed``: back to the first point, a periodic loop), arriving at each point with
-    ``arrival_heading`` (or its opposite when ``parallel``).  Dynamic programming over the
-    arrival heading at each point.  NaN for more than :data:`KINEMATIC_MAX` legs."""
+    ``arrival_heading`` (or its opposite when ``parallel``; any of ``headings`` if given, e.g.
+    the planner's admissible ones).  Dynamic programming over the arrival heading at each
+    point.  NaN for more than :data:`KINEMATIC_MAX` legs."""
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)[np.asarray(order, dtype=np.int64)]
     if len(pts) == 0:
         return 0.0
     if len(pts) > KINEMATIC_MAX:
         return math.nan
-    heads = [arrival_heading, arrival_heading + math.pi] if parallel else [arrival_heading]
+    if headings is not None:
+        heads = [float(h) for h in headings]
+    else:
+        heads = [arrival_heading, arrival_heading + math.pi] if parallel else [arrival_heading]
     seq = [*pts, pts[0]] if closed else list(pts)
 
     def legs(best0: list[float]) -> list[float]:

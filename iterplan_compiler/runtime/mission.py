@@ -69,6 +69,36 @@ class RunConfig:
     on_event_labels: frozenset[str] | None = None
 
 
+class TargetMemory:
+    """Which ``go.next`` target followed which, the last time (``HeadingChoice.REPEAT``).  The
+    plan's order is in the controller; the hybrid layer only learns it by watching, so nothing
+    is expected before the mission has repeated a target."""
+
+    def __init__(self) -> None:
+        self._followed: dict[int, int] = {}
+        self._previous: int | None = None
+
+    def record(self, cell: int) -> None:
+        """``cell`` is the new target."""
+        if self._previous is not None:
+            self._followed[self._previous] = cell
+        self._previous = cell
+
+    def expected_after(self, cell: int, limit: int = 8) -> tuple[list[int], bool]:
+        """The targets that followed ``cell`` the last time, then their successors, up to
+        ``limit``; and whether that chain leads back to ``cell`` (a patrol cycle)."""
+        chain: list[int] = []
+        c = self._followed.get(cell)
+        while c is not None and len(chain) < limit:
+            if c == cell:
+                return chain, True
+            if c in chain:
+                break
+            chain.append(c)
+            c = self._followed.get(c)
+        return chain, False
+
+
 class MissionContext:
     """What bindings can see and do (iterator, planner, vehicle, map, logging)."""
 
@@ -82,6 +112,7 @@ class MissionContext:
         self.target_cell: int | None = None
         self.last_arrival: int | None = None
         self.done: set[str] = set()
+        self.targets = TargetMemory()
 
     def predicted_pose(self) -> Pose:
         """Where the vehicle will be when the current leg ends: the arrival pose of the active
@@ -100,7 +131,11 @@ class MissionContext:
             planned = self.iterator.sorter.planned_heading(cell)
             if planned is None and self.iterator.remaining_count():
                 then = self.grid.centre(int(self.iterator.peek_order(1)[0]))
-        arrival = self.planner.go(*self.grid.centre(cell), then=then, heading=planned)
+        self.targets.record(int(cell))
+        chain, closes = (self.targets.expected_after(int(cell))
+                         if self.planner.choice is HeadingChoice.REPEAT else ([], False))
+        arrival = self.planner.go(*self.grid.centre(cell), then=then, heading=planned,
+                                  chain=[self.grid.centre(c) for c in chain], closes=closes)
         self._ex.counts["go"] += 1
         # Sorting happens while the aircraft flies the leg, from the predicted arrival pose.
         self.iterator.resort(arrival)

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,6 +65,8 @@ class HeadingChoice(enum.Enum):
     SHORTEST = "shortest"     # the paper's: the shortest path to the target
     LOOKAHEAD = "lookahead"   # shortest to the target plus the next leg (to the location
     #                           the Iterator offers next): favours flying on straight
+    REPEAT = "repeat"         # LOOKAHEAD to the location that followed this one the last
+    #                           time the mission went there (patrols); SHORTEST before that
 
 
 def admissible_headings(arrival_heading: float, parallel: bool,
@@ -217,29 +220,51 @@ class MotionPlanner:
         return best
 
     def go(self, x: float, y: float, then: tuple[float, float] | None = None,
-           heading: float | None = None) -> Pose:
+           heading: float | None = None, chain: Sequence[tuple[float, float]] = (),
+           closes: bool = False) -> Pose:
         """Start flying to ``(x, y)``; returns the predicted arrival pose (for the Sorter).
         ``then``: the location expected next (``HeadingChoice.LOOKAHEAD`` picks the arrival
         heading that minimises this leg plus the next one); ``heading``: an arrival heading
-        planned by the Sorter (``tour``), taken as it is under ``LOOKAHEAD``."""
+        planned by the Sorter (``tour``), taken as it is under ``LOOKAHEAD``; ``chain``: the
+        locations expected after this one (``REPEAT``: the heading minimising the legs through
+        them, and back here if ``closes``)."""
         self.target = (float(x), float(y))
         self._target_misses = 0
         self._fixed = None
         if heading is not None and self.choice is HeadingChoice.LOOKAHEAD:
             self._fixed = (float(heading),)
         elif then is not None and self.choice is HeadingChoice.LOOKAHEAD:
-            p = self.vehicle.pose()
-            start = Pose(p.x, p.y, p.course)
-
-            def cost(h: float) -> float:
-                leg = shortest_csc(start, x, y, h, self.radius).length
-                nxt = min(shortest_csc(Pose(x, y, h), then[0], then[1], h2, self.radius).length
-                          for h2 in self.admissible)
-                return leg + nxt
-
-            self._fixed = (min(self.admissible, key=cost),)
+            self._fixed = (self._best_heading(x, y, (then,), closes=False),)
+        elif chain and self.choice is HeadingChoice.REPEAT:
+            self._fixed = (self._best_heading(x, y, chain, closes=closes),)
         self._plan()
         return Pose(x, y, self.heading)
+
+    def _best_heading(self, x: float, y: float, chain: Sequence[tuple[float, float]],
+                      closes: bool) -> float:
+        """The admissible arrival heading at ``(x, y)`` that minimises this leg plus the legs
+        through ``chain`` (and back to ``(x, y)`` if ``closes``: a patrol cycle), each arrival
+        heading admissible: a dynamic programme over the headings along the chain."""
+        p = self.vehicle.pose()
+        start = Pose(p.x, p.y, p.course)
+        hs = self.admissible
+
+        def csc(a: tuple[float, float], ha: float, b: tuple[float, float], hb: float) -> float:
+            return shortest_csc(Pose(a[0], a[1], ha), b[0], b[1], hb, self.radius).length
+
+        def onward(h: float) -> float:
+            best = {h: 0.0}
+            here = (x, y)
+            for point in chain:
+                best = {h2: min(c + csc(here, h1, point, h2) for h1, c in best.items())
+                        for h2 in hs}
+                here = point
+            if closes:
+                return min(c + csc(here, h1, (x, y), h) for h1, c in best.items())
+            return min(best.values())
+
+        return min(hs, key=lambda h: shortest_csc(start, x, y, h, self.radius).length
+                   + onward(h))
 
     def _plan(self) -> None:
         assert self.target is not None

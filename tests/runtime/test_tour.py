@@ -63,7 +63,9 @@ def fly(table, case, sorter, headings=ArrivalHeadings.PARALLEL,
 @pytest.mark.parametrize("headings,choice", [
     (ArrivalHeadings.PARALLEL, HeadingChoice.LOOKAHEAD),
     (ArrivalHeadings.GRID, HeadingChoice.SHORTEST),
-    (ArrivalHeadings.GRID, HeadingChoice.LOOKAHEAD)])
+    (ArrivalHeadings.GRID, HeadingChoice.LOOKAHEAD),
+    (ArrivalHeadings.PARALLEL, HeadingChoice.REPEAT),
+    (ArrivalHeadings.GRID, HeadingChoice.REPEAT)])
 def test_heading_levers_leave_the_controller_events_unchanged(cover_table, headings, choice):
     case = Case("fig3c", 144, 12, "last", 1)
     ref_events, ref_offered, ref = fly(cover_table, case, SorterKind.LAST)
