@@ -124,8 +124,9 @@ def kinematic_floor_s(case: Case, res, grid, radius: float, headings=None) -> fl
     """The measurement's kinematic floor (s): what the same mission costs at least with the
     turn radius (runtime/ideal.py).  Patrol: the periodic loop through the patrol cells in
     order; Cover: from the pose at the first ``has.next``, the shorter of the order flown and
-    the ideal's order, each with the best arrival headings (either way along the map's
-    direction).  At the planned airspeed, like the ideal."""
+    the ideal's order, each with the best arrival headings (``headings``: the run's admissible
+    ones; default either way along the map's direction).  At the planned airspeed, like the
+    ideal."""
     import numpy as np
 
     from iterplan_compiler.runtime.ideal import ideal_path, kinematic_floor
@@ -152,7 +153,7 @@ def kinematic_floor_s(case: Case, res, grid, radius: float, headings=None) -> fl
     arr = np.asarray(flown, dtype=np.float64).reshape(-1, 2)
     best = ideal_path(arr, (start.x, start.y))
     orders = [list(range(len(arr)))] + ([list(best.order)] if best.order else [])
-    heads = (h, h + math.pi)
+    heads = (h, h + math.pi) if headings is None else tuple(headings)
     return min(dubins_order_length(arr[o], pose, heads, radius) for o in orders) / res.speed
 
 

@@ -200,9 +200,15 @@ def candidate_orders(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
     if len(pts) > 1:
         for axis in (headings[0], headings[0] + math.pi / 2):
             cands.extend(_sweeps(pts, axis, spacing))
-    cands.append(_greedy(pts, start, headings, radius))
-    if 2 <= len(pts) <= LKH_MAX:
-        cands.append(_lkh_gtsp(pts, start, headings, radius))
+    # With more than two headings, the orders found with the first two (the map's axis,
+    # either way) are candidates too: the heuristics over 4 headings per cell can miss them,
+    # and flown with all the headings (the DP) they are never longer, so a plan over the grid
+    # headings is never longer than one over the axis.
+    sets = [headings] if len(headings) <= 2 else [headings, headings[:2]]
+    for hs in sets:
+        cands.append(_greedy(pts, start, hs, radius))
+        if 2 <= len(pts) <= LKH_MAX:
+            cands.append(_lkh_gtsp(pts, start, hs, radius))
     return cands
 
 

@@ -117,3 +117,22 @@ def test_plan_is_no_longer_than_greedy_and_the_dp_heads_reproduce_its_length():
     assert planned == again and len(planned) == len(pts)
     greedy = dubins_order_length(pts[_greedy(pts, start, heads, 44.0)], start, heads, 44.0)
     assert length <= greedy + 1e-6
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_grid_plan_is_never_longer_than_an_axis_plan(seed):
+    """The orders found over the axis headings are candidates of a grid plan too (and the DP
+    flies them with all four headings), so adding headings can only shorten the plan."""
+    rng = np.random.default_rng(seed)
+    side = 4
+    pts = np.array([((c + 0.5) * 50, (r + 0.5) * 50) for r in range(side) for c in range(side)])
+    pts = pts[: 10 + seed * 3]
+    start = Pose(float(rng.uniform(-400, -100)), float(rng.uniform(-400, -100)),
+                 float(rng.uniform(0, 2 * math.pi)))
+    axis = (math.pi / 2, 3 * math.pi / 2)
+    grid = (*axis, 0.0, math.pi)
+    lengths = {}
+    for heads in (axis, grid):
+        order, _ = plan_tour(pts, start, heads, 43.9, 50.0)
+        lengths[len(heads)] = dubins_order_length(pts[order], start, heads, 43.9)
+    assert lengths[4] <= lengths[2] + 1e-6
