@@ -48,3 +48,27 @@ def test_rerun_skips_finished_rows_and_fig3a_writes_its_csv(tmp_path, capsys):
                      str(tmp_path)]) == 0
     fig3a = list(csv.DictReader((tmp_path / "fig3a.csv").open()))
     assert [r["universe"] for r in fig3a] == ["144"] and float(fig3a[0]["loop_s"]) > 0
+
+
+def test_fig3b_warmup_and_heading_flags_and_rows_from_older_csvs(tmp_path, capsys):
+    """--warmup measures the loops after the first (the first loop's time is kept as a
+    column); a results CSV written before the column existed is still resumed from."""
+    args = ["experiment", "fig3b", "--quick", "--seeds", "1", "--sorters", "last",
+            "--sizes", "144", "--fast-skip", "--headings", "grid", "--heading-choice",
+            "repeat", "--warmup", "1", "--out", str(tmp_path), "--no-progress"]
+    assert cli.main(args) == 0
+    rows = list(csv.DictReader((tmp_path / "fig3b.csv").open()))
+    assert len(rows) == 1 and rows[0]["warmup"] == "1"
+    assert float(rows[0]["first_loop"]) > float(rows[0]["duration"]) > float(rows[0]["ideal"])
+    summary = list(csv.DictReader((tmp_path / "fig3b_summary.csv").open()))
+    assert float(summary[0]["first_loop_pct"]) > float(summary[0]["overhead_pct"])
+    # an older CSV without the new columns: its runs count as done
+    old = [{k: v for k, v in r.items() if k not in ("first_loop", "warmup")} for r in rows]
+    with (tmp_path / "fig3b.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(old[0]))
+        w.writeheader()
+        w.writerows(old)
+    capsys.readouterr()
+    assert cli.main(args) == 0
+    assert "1 of 1 runs already done" in capsys.readouterr().err
+    assert cli.main(args[:-5] + ["--warmup=-1", "--out", str(tmp_path)]) == 2
