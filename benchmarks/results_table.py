@@ -34,16 +34,21 @@ def table(path: Path) -> str:
     by = defaultdict(dict)
     for r in rows:
         by[int(r[xkey])][r["sorter"]] = r
+    # sweeps measured after a warm-up loop also report the first loop (fig3b --warmup)
+    first = any(r.get("first_loop_pct") not in (None, "", "nan") for r in rows)
     head = f"| {xkey} | n | " + " | ".join(f"{s} overhead %" for s in sorters) + \
+        (" | first loop % (distance)" if first else "") + \
         " | physics floor % (distance) | ideal s |"
     out = [f"**{exp}** ({path.parent.name}; paper: {PAPER.get(exp, '')})", "", head,
-           "|" + "---|" * (len(sorters) + 4)]
+           "|" + "---|" * (len(sorters) + 4 + first)]
     for x in sorted(by):
         cells = [fmt(by[x][s]["overhead_pct"], by[x][s]["overhead_err3"]) if s in by[x] else ""
                  for s in sorters]
         any_row = next(iter(by[x].values()))
         ref = by[x].get("distance", any_row)
-        out.append(f"| {x:,} | {any_row['n']} | " + " | ".join(cells) +
+        extra = (f" | {fmt(ref.get('first_loop_pct', ''), ref.get('first_loop_err3', ''))}"
+                 if first else "")
+        out.append(f"| {x:,} | {any_row['n']} | " + " | ".join(cells) + extra +
                    f" | {fmt(ref.get('physics_pct', ''), ref.get('physics_err3', ''))} | "
                    f"{float(any_row['ideal']):.1f} |")
     return "\n".join(out)

@@ -181,6 +181,7 @@ class Point:
     physics_pct: float = math.nan
     physics_err3: float = math.nan
     #: fig3b: the first patrol loop's overhead (%), when loops after a warm-up are measured
+    #: (runs with ``warmup`` > 0; else NaN: the first loop is in ``duration``)
     first_loop_pct: float = math.nan
     first_loop_err3: float = math.nan
 
@@ -199,7 +200,7 @@ def aggregate(rows: Iterable[dict]) -> list[Point]:
         ideal = summarize(float(r["ideal"]) for r in ok).mean
         ph = summarize(_num(r.get("physics_pct")) for r in ok)
         first = summarize(100.0 * (_num(r.get("first_loop")) - float(r["ideal"]))
-                          / float(r["ideal"]) for r in ok)
+                          / float(r["ideal"]) for r in ok if _num(r.get("warmup")) > 0)
         points.append(Point(key[0], key[1], key[2], key[3], n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
                             overhead_pct=o.mean, overhead_err3=o.err3,
                             failed=len(rs) - len(ok), physics_pct=ph.mean,
