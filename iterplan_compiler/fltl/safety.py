@@ -21,6 +21,7 @@ Construction (no per-pattern special cases):
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from collections.abc import Mapping
 
 from iterplan_compiler import limits
@@ -85,6 +86,41 @@ def safety_dfa(
     return make_lts(named.name, len(order), trans, letters), aut, order
 
 
+#: The subset DFAs of the last few translations, by the key of their inputs
+#: (:func:`dfa_key`).  ``iterc`` builds a formula's DFA twice per run: elaboration's
+#: open-alphabet test (:mod:`.open_safety`) and the build's translation; on an empty cache the
+#: second was Ordered Patrol's costliest repeat (``Phi1``: ~0.16 s CPU, issue #12).  Bounded,
+#: so a long-lived process (tests, experiments) does not keep every automaton it ever built.
+_RECENT_DFAS: OrderedDict[str, tuple[LTS, FormulaAutomaton, list[frozenset]]] = OrderedDict()
+_RECENT_MAX = 8
+
+
+def dfa_key(named: NamedFormula, fluents: Mapping[str, Fluent], max_states: int) -> str | None:
+    """The key of :func:`safety_dfa`'s inputs (the DFA does not depend on property vs
+    constraint: that key bit is fixed)."""
+    return safety_cache.cache_key(named, fluents, constraint=False, max_states=max_states)
+
+
+def recent_safety_dfa(
+    key: str | None,
+    named: NamedFormula,
+    fluents: Mapping[str, Fluent],
+    *,
+    max_states: int,
+) -> tuple[LTS, FormulaAutomaton, list[frozenset]]:
+    """:func:`safety_dfa`, or the one built for the same ``key`` recently in this process
+    (its result is a pure function of what the key hashes; exceptions are not kept)."""
+    if key is not None and key in _RECENT_DFAS:
+        _RECENT_DFAS.move_to_end(key)
+        return _RECENT_DFAS[key]
+    out = safety_dfa(named, fluents, max_states=max_states)
+    if key is not None:
+        _RECENT_DFAS[key] = out
+        while len(_RECENT_DFAS) > _RECENT_MAX:
+            _RECENT_DFAS.popitem(last=False)
+    return out
+
+
 def not_safety_witness(
     dfa: LTS,
     named: NamedFormula,
@@ -134,7 +170,9 @@ def safety_lts(
         return lts, [_unsatisfiable(kind, named)] if unsatisfiable else []
     started = time.process_time()
     try:
-        dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
+        dfa, _, subsets = recent_safety_dfa(
+            key if not constraint else dfa_key(named, fluents, max_states), named, fluents,
+            max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
     except UnknownFluentError as exc:
         return None, [error(E_UNKNOWN_FLUENT, f"{kind} {named.name}: {exc}", named.span)]
