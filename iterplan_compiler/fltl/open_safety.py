@@ -18,15 +18,12 @@ from dataclasses import replace
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.fltl import safety_cache
-from iterplan_compiler.fltl.emptiness import StateLimitExceeded
-from iterplan_compiler.fltl.progression import WILDCARD
 from iterplan_compiler.fltl.safety import (
     DEFAULT_MAX_STATES,
     not_safety_witness,
     recent_safety_dfa,
     safety_dfa,
 )
-from iterplan_compiler.fltl.semantics import UnknownFluentError
 from iterplan_compiler.ir.formulas import NamedFormula
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.ir.model import Model
@@ -56,6 +53,11 @@ def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
 
 def _open_witness(named: NamedFormula, model: Model, cap: int, key: str | None
                   ) -> str | None:
+    # the translation's modules: only when the cache did not answer (see safety.py)
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded
+    from iterplan_compiler.fltl.progression import WILDCARD
+    from iterplan_compiler.fltl.semantics import UnknownFluentError
+
     wide = replace(named, extra_alphabet=named.extra_alphabet | {WILDCARD})
     try:
         # the build's translation of the same formula reuses this DFA (safety.py)

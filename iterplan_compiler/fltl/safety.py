@@ -23,16 +23,21 @@ from __future__ import annotations
 import time
 from collections import OrderedDict
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
 from iterplan_compiler.fltl import safety_cache
-from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
-from iterplan_compiler.fltl.progression import FormulaAutomaton, State
-from iterplan_compiler.fltl.semantics import UnknownFluentError
 from iterplan_compiler.ir.formulas import Fluent, NamedFormula
 from iterplan_compiler.ir.lts import ERROR, LTS, make_lts, reachable
 from iterplan_compiler.ir.minimise import minimise
+
+if TYPE_CHECKING:
+    from iterplan_compiler.fltl.progression import FormulaAutomaton, State
+
+# The translation's own modules (progression, emptiness, semantics: ~900 lines) are imported
+# where a translation runs: a run whose formulas all come from the cache (a warm
+# ``iterc compile``) does not load them (issue #12).
 
 # Stable diagnostic codes of the FLTL stage.
 E_UNKNOWN_FLUENT = "E0604"
@@ -52,6 +57,9 @@ def safety_dfa(
     """The (non-minimised) subset DFA of step 3 as an LTS with ERROR moves, the automaton it was
     built from and the subset of each DFA state.  Raises :class:`UnknownFluentError` and
     :class:`StateLimitExceeded`."""
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse
+    from iterplan_compiler.fltl.progression import FormulaAutomaton
+
     aut = FormulaAutomaton(named.formula, fluents)
     letters = sorted(aut.alphabet | named.extra_alphabet)
 
@@ -128,6 +136,9 @@ def not_safety_witness(
     max_states: int = DEFAULT_MAX_STATES,
 ) -> tuple[list[str], list[str]] | None:
     """An infinite word never rejected by ``dfa`` that violates φ, or ``None`` (φ is safety)."""
+    from iterplan_compiler.fltl.emptiness import analyse, lasso
+    from iterplan_compiler.fltl.progression import FormulaAutomaton
+
     neg = FormulaAutomaton(named.formula, fluents, negate=True)
     out = dfa.out_edges()
 
@@ -168,6 +179,9 @@ def safety_lts(
     if cached is not None:
         lts, unsatisfiable = cached
         return lts, [_unsatisfiable(kind, named)] if unsatisfiable else []
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded
+    from iterplan_compiler.fltl.semantics import UnknownFluentError
+
     started = time.process_time()
     try:
         dfa, _, subsets = recent_safety_dfa(

@@ -95,14 +95,17 @@ def test_no_cache_env_disables_it(cache, monkeypatch):
     assert not cache.exists()
 
 
-def test_a_warm_compile_does_not_import_lark(tmp_path):
-    spec = Path(__file__).resolve().parents[2] / "examples" / "cover.lts"
+def test_a_warm_compile_imports_neither_lark_nor_the_fltl_translator(tmp_path):
+    """Issue #12: with the caches filled, ``iterc compile`` parses nothing and translates no
+    formula, so it does not load Lark or fltl's tableau (progression/emptiness)."""
+    spec = Path(__file__).resolve().parents[2] / "examples" / "fire_patrol.lts"
     code = ("import sys\n"
             "from iterplan_compiler import pipeline\n"
             f"out = pipeline.compile_spec({str(spec)!r})\n"
             "assert out.text is not None, out.diagnostics\n"
-            "print('lark' in sys.modules)\n")
+            "print(*(m in sys.modules for m in ('lark', 'iterplan_compiler.fltl.progression',"
+            " 'iterplan_compiler.fltl.emptiness')))\n")
     env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}
     runs = [subprocess.run([sys.executable, "-c", code], env=env, check=True,
                            capture_output=True, text=True).stdout.split() for _ in range(2)]
-    assert runs == [["True"], ["False"]]
+    assert runs == [["True"] * 3, ["False"] * 3]
