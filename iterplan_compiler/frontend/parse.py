@@ -77,7 +77,7 @@ def _grammar_text() -> str:
 def seed_header(grammar: str) -> bytes:
     """The first line of :data:`SEED`: a hash of what the tables depend on, then the Lark
     release and Python version (readable, for the test that the shipped tables are current)."""
-    py = "%d.%d" % sys.version_info[:2]
+    py = "{}.{}".format(*sys.version_info[:2])
     key = hashlib.sha256(f"{lark.__version__}\n{py}\n{sorted(_OPTIONS.items())}\n{grammar}"
                          .encode()).hexdigest()
     return f"{key} lark-{lark.__version__} py{py}\n".encode()

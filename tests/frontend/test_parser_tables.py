@@ -56,8 +56,8 @@ def _parse_all(monkeypatch: pytest.MonkeyPatch, parser: Lark) -> list[object]:
     files = sorted(ROOT.glob("examples/*.lts")) + sorted(ROOT.glob("stdlib/*.lts"))
     assert len(files) > 8
     for path in files:
-        text = path.read_text(encoding="utf-8")
-        for text in (text, text + "\nBad = (a -> ).\nWorse = (b -> @).\n"):  # errors too
+        good = path.read_text(encoding="utf-8")
+        for text in (good, good + "\nBad = (a -> ).\nWorse = (b -> @).\n"):  # errors too
             spec, diags = parse.parse_text(text, str(path))
             out.append((repr(spec), _spans(spec, []), [(d.code, d.message, d.span)
                                                        for d in diags]))
