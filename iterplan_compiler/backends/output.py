@@ -9,11 +9,8 @@ from __future__ import annotations
 import enum
 import hashlib
 
-from iterplan_compiler.backends.graphviz import to_dot
-from iterplan_compiler.backends.jsonout import to_json
 from iterplan_compiler.backends.python import emit_module
 from iterplan_compiler.diagnostics import Span
-from iterplan_compiler.ir.fsp_print import lts_to_fsp
 from iterplan_compiler.ir.lts import LTS, reachable
 
 
@@ -58,13 +55,17 @@ def canonical_controller(controller: LTS) -> LTS:
 
 def emit(kind: EmitKind, controller: LTS, controllable: frozenset[str], *, name: str,
          source_name: str, spec_hash: str, origins: dict[str, Span] | None = None) -> str:
-    """Render a synthesised controller as ``kind``."""
+    """Render a synthesised controller as ``kind`` (the back-end of another kind than the
+    default is imported only when asked for: ``iterc compile`` start-up, issue #12)."""
     if kind is EmitKind.PY:
         return emit_module(controller, controllable=controllable, name=name,
                            source_name=source_name, spec_hash=spec_hash, origins=origins)
     if kind is EmitKind.DOT:
+        from iterplan_compiler.backends.graphviz import to_dot
         return to_dot(controller, controllable=controllable)
     if kind is EmitKind.JSON:
+        from iterplan_compiler.backends.jsonout import to_json
         return to_json(controller, controllable)
+    from iterplan_compiler.ir.fsp_print import lts_to_fsp
     text = lts_to_fsp(controller)
     return text if text.endswith("\n") else text + "\n"

@@ -18,10 +18,12 @@ from dataclasses import replace
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.fltl import safety_cache
-from iterplan_compiler.fltl.emptiness import StateLimitExceeded
-from iterplan_compiler.fltl.progression import WILDCARD
-from iterplan_compiler.fltl.safety import DEFAULT_MAX_STATES, not_safety_witness, safety_dfa
-from iterplan_compiler.fltl.semantics import UnknownFluentError
+from iterplan_compiler.fltl.safety import (
+    DEFAULT_MAX_STATES,
+    not_safety_witness,
+    recent_safety_dfa,
+    safety_dfa,
+)
 from iterplan_compiler.ir.formulas import NamedFormula
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.ir.model import Model
@@ -43,16 +45,23 @@ def open_safety_witness(named: NamedFormula, model: Model) -> str | None:
     if found:
         return cached
     started = time.process_time()
-    witness = _open_witness(named, model, cap)
+    witness = _open_witness(named, model, cap, key)
     if time.process_time() - started >= safety_cache.WORTH_CACHING_S:
         safety_cache.store_witness(key, witness)
     return witness
 
 
-def _open_witness(named: NamedFormula, model: Model, cap: int) -> str | None:
+def _open_witness(named: NamedFormula, model: Model, cap: int, key: str | None
+                  ) -> str | None:
+    # the translation's modules: only when the cache did not answer (see safety.py)
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded
+    from iterplan_compiler.fltl.progression import WILDCARD
+    from iterplan_compiler.fltl.semantics import UnknownFluentError
+
     wide = replace(named, extra_alphabet=named.extra_alphabet | {WILDCARD})
     try:
-        closed, _, _ = safety_dfa(named, model.fluents, max_states=cap)
+        # the build's translation of the same formula reuses this DFA (safety.py)
+        closed, _, _ = recent_safety_dfa(key, named, model.fluents, max_states=cap)
         if any(t == ERROR for _, _, t in closed.transitions):
             return None  # it forbids something: the builder's own safety test (§2.8) decides
         dfa, _, _ = safety_dfa(wide, model.fluents, max_states=cap)

@@ -21,17 +21,23 @@ Construction (no per-pattern special cases):
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from iterplan_compiler import limits
 from iterplan_compiler.diagnostics import Diagnostic, error, warning
 from iterplan_compiler.fltl import safety_cache
-from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse, lasso
-from iterplan_compiler.fltl.progression import FormulaAutomaton, State
-from iterplan_compiler.fltl.semantics import UnknownFluentError
 from iterplan_compiler.ir.formulas import Fluent, NamedFormula
 from iterplan_compiler.ir.lts import ERROR, LTS, make_lts, reachable
 from iterplan_compiler.ir.minimise import minimise
+
+if TYPE_CHECKING:
+    from iterplan_compiler.fltl.progression import FormulaAutomaton, State
+
+# The translation's own modules (progression, emptiness, semantics: ~900 lines) are imported
+# where a translation runs: a run whose formulas all come from the cache (a warm
+# ``iterc compile``) does not load them (issue #12).
 
 # Stable diagnostic codes of the FLTL stage.
 E_UNKNOWN_FLUENT = "E0604"
@@ -51,6 +57,9 @@ def safety_dfa(
     """The (non-minimised) subset DFA of step 3 as an LTS with ERROR moves, the automaton it was
     built from and the subset of each DFA state.  Raises :class:`UnknownFluentError` and
     :class:`StateLimitExceeded`."""
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded, analyse
+    from iterplan_compiler.fltl.progression import FormulaAutomaton
+
     aut = FormulaAutomaton(named.formula, fluents)
     letters = sorted(aut.alphabet | named.extra_alphabet)
 
@@ -85,6 +94,41 @@ def safety_dfa(
     return make_lts(named.name, len(order), trans, letters), aut, order
 
 
+#: The subset DFAs of the last few translations, by the key of their inputs
+#: (:func:`dfa_key`).  ``iterc`` builds a formula's DFA twice per run: elaboration's
+#: open-alphabet test (:mod:`.open_safety`) and the build's translation; on an empty cache the
+#: second was Ordered Patrol's costliest repeat (``Phi1``: ~0.16 s CPU, issue #12).  Bounded,
+#: so a long-lived process (tests, experiments) does not keep every automaton it ever built.
+_RECENT_DFAS: OrderedDict[str, tuple[LTS, FormulaAutomaton, list[frozenset]]] = OrderedDict()
+_RECENT_MAX = 8
+
+
+def dfa_key(named: NamedFormula, fluents: Mapping[str, Fluent], max_states: int) -> str | None:
+    """The key of :func:`safety_dfa`'s inputs (the DFA does not depend on property vs
+    constraint: that key bit is fixed)."""
+    return safety_cache.cache_key(named, fluents, constraint=False, max_states=max_states)
+
+
+def recent_safety_dfa(
+    key: str | None,
+    named: NamedFormula,
+    fluents: Mapping[str, Fluent],
+    *,
+    max_states: int,
+) -> tuple[LTS, FormulaAutomaton, list[frozenset]]:
+    """:func:`safety_dfa`, or the one built for the same ``key`` recently in this process
+    (its result is a pure function of what the key hashes; exceptions are not kept)."""
+    if key is not None and key in _RECENT_DFAS:
+        _RECENT_DFAS.move_to_end(key)
+        return _RECENT_DFAS[key]
+    out = safety_dfa(named, fluents, max_states=max_states)
+    if key is not None:
+        _RECENT_DFAS[key] = out
+        while len(_RECENT_DFAS) > _RECENT_MAX:
+            _RECENT_DFAS.popitem(last=False)
+    return out
+
+
 def not_safety_witness(
     dfa: LTS,
     named: NamedFormula,
@@ -92,6 +136,9 @@ def not_safety_witness(
     max_states: int = DEFAULT_MAX_STATES,
 ) -> tuple[list[str], list[str]] | None:
     """An infinite word never rejected by ``dfa`` that violates φ, or ``None`` (φ is safety)."""
+    from iterplan_compiler.fltl.emptiness import analyse, lasso
+    from iterplan_compiler.fltl.progression import FormulaAutomaton
+
     neg = FormulaAutomaton(named.formula, fluents, negate=True)
     out = dfa.out_edges()
 
@@ -132,9 +179,14 @@ def safety_lts(
     if cached is not None:
         lts, unsatisfiable = cached
         return lts, [_unsatisfiable(kind, named)] if unsatisfiable else []
+    from iterplan_compiler.fltl.emptiness import StateLimitExceeded
+    from iterplan_compiler.fltl.semantics import UnknownFluentError
+
     started = time.process_time()
     try:
-        dfa, aut, subsets = safety_dfa(named, fluents, max_states=max_states)
+        dfa, _, subsets = recent_safety_dfa(
+            key if not constraint else dfa_key(named, fluents, max_states), named, fluents,
+            max_states=max_states)
         witness = not_safety_witness(dfa, named, fluents, max_states)
     except UnknownFluentError as exc:
         return None, [error(E_UNKNOWN_FLUENT, f"{kind} {named.name}: {exc}", named.span)]

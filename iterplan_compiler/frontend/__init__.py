@@ -20,9 +20,9 @@ from iterplan_compiler.diagnostics import Diagnostic, Span, error, has_errors
 from iterplan_compiler.frontend.elaborate import elaborate
 from iterplan_compiler.frontend.errors import too_deep
 from iterplan_compiler.frontend.includes import expand_includes
-from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.source import read_spec, text_binary_at
 from iterplan_compiler.frontend.syntax import SpecFile
+from iterplan_compiler.frontend.syntax_cache import parse_text
 from iterplan_compiler.ir.model import Model
 from iterplan_compiler.ir.solving import Synthesis
 

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from lark import Token
+from typing import TYPE_CHECKING
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error
+
+if TYPE_CHECKING:  # the front-end imports Lark only to parse (see syntax_cache)
+    from lark import Token
 
 
 def too_deep(path: str) -> Diagnostic:

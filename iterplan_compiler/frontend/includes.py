@@ -13,8 +13,8 @@ from pathlib import Path
 
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.frontend import syntax as S
-from iterplan_compiler.frontend.parse import parse_text
 from iterplan_compiler.frontend.source import decode, read_spec
+from iterplan_compiler.frontend.syntax_cache import parse_text
 
 
 def _resolve(name: str, including: str) -> tuple[str, str] | str | None:

@@ -103,3 +103,31 @@ def test_no_cache_env_writes_nothing(tmp_path, monkeypatch):
     monkeypatch.setattr(safety_cache, "WORTH_CACHING_S", 0.0)
     _translate(_formulas(), "P")
     assert not (Path(tmp_path) / "iterplan" / "safety").exists()
+
+
+def test_the_build_reuses_the_dfa_of_the_open_alphabet_test(monkeypatch):
+    """Elaboration's open-alphabet test and the build's translation of the same formula
+    build its subset DFA once (fltl/safety.py recent_safety_dfa), even with no disk cache."""
+    from iterplan_compiler.fltl import open_safety, safety
+
+    monkeypatch.setenv("ITERPLAN_NO_CACHE", "1")
+    monkeypatch.setattr(safety, "_RECENT_DFAS", type(safety._RECENT_DFAS)())
+    built: list[str] = []
+    real = safety.safety_dfa
+
+    def counting(named, fluents, *, max_states=safety.DEFAULT_MAX_STATES):
+        built.append(named.name)
+        return real(named, fluents, max_states=max_states)
+
+    monkeypatch.setattr(safety, "safety_dfa", counting)
+    monkeypatch.setattr(open_safety, "safety_dfa", counting)
+    model = _formulas()
+    for name in ("P", "Q"):
+        assert open_safety.open_safety_witness(model.formulas[name], model) is None
+        fresh = len(built)
+        lts, _ = _translate(model, name)
+        assert lts is not None
+        assert built.count(name) == 1 and len(built) == fresh  # reused, not rebuilt
+    nf = model.formulas["P"]
+    safety_lts(nf, model.fluents, constraint=False, max_states=50)   # another limit: rebuilt
+    assert built.count("P") == 2
