@@ -29,7 +29,7 @@ from iterplan_compiler.diagnostics import Diagnostic, Span, error
 from iterplan_compiler.frontend import syntax as S
 from iterplan_compiler.frontend.errors import Malformed, tok_span
 from iterplan_compiler.frontend.tree_to_ast import TreeToAst
-from iterplan_compiler.outputs import atomic_write_bytes, user_cache_dir
+from iterplan_compiler.outputs import user_cache_dir
 
 _MAX_ERRORS = 50
 
@@ -56,15 +56,6 @@ def _cache_file(grammar: str) -> str | bool:
     return os.path.join(str(folder), f"fsp-lark-py{sys.version_info[0]}{sys.version_info[1]}-{key}.pickle")
 
 
-#: The parse tables shipped with the grammar (``Lark.save`` of the parser of ``fsp.lark``,
-#: after a header line: :func:`seed_header`).  Loading them takes ~0.05 s where analysing the
-#: grammar takes ~0.35 s, so a first run (an empty cache folder) is as fast as a warm one.
-#: They are used only when the header matches the grammar, the options, the Lark release
-#: and the Python version in use; otherwise Lark builds the tables (and caches them in the
-#: user's folder, :func:`_cache_file`).  Regenerate after editing the grammar:
-#: ``python -c "from iterplan_compiler.frontend.parse import write_seed; write_seed()"``.
-SEED = "fsp-tables.pickle"
-
 _OPTIONS: dict[str, object] = dict(parser="lalr", lexer="contextual", propagate_positions=True,
                                    maybe_placeholders=True)
 
@@ -74,34 +65,11 @@ def _grammar_text() -> str:
         encoding="utf-8")
 
 
-def seed_header(grammar: str) -> bytes:
-    """The first line of :data:`SEED`: a hash of what the tables depend on, then the Lark
-    release and Python version (readable, for the test that the shipped tables are current)."""
-    py = "{}.{}".format(*sys.version_info[:2])
-    key = hashlib.sha256(f"{lark.__version__}\n{py}\n{sorted(_OPTIONS.items())}\n{grammar}"
-                         .encode()).hexdigest()
-    return f"{key} lark-{lark.__version__} py{py}\n".encode()
-
-
-def _from_seed(grammar: str) -> Lark | None:
-    try:
-        with importlib.resources.files("iterplan_compiler.grammar").joinpath(SEED).open(
-                "rb") as f:
-            if f.readline() != seed_header(grammar):
-                return None
-            return Lark.load(f)
-    except Exception:  # noqa: BLE001 - no seed, or one this Lark cannot read: build instead
-        return None
-
-
 @functools.lru_cache(maxsize=1)
 def parser() -> Lark:
-    """The (cached) Lark LALR parser of ``fsp.lark``: the shipped tables when they match,
-    else Lark's own cache in the user's folder, else built from the grammar."""
+    """The (cached) Lark LALR parser of ``fsp.lark``: from Lark's own cache in the user's
+    folder, else built from the grammar."""
     text = _grammar_text()
-    seeded = _from_seed(text)
-    if seeded is not None:
-        return seeded
     cache = _cache_file(text)
     if cache:
         try:
@@ -109,19 +77,6 @@ def parser() -> Lark:
         except Exception:  # noqa: BLE001 - a broken cache must never stop the compiler
             pass
     return Lark(text, cache=False, **_OPTIONS)
-
-
-def write_seed() -> str:
-    """Build the tables of the current grammar afresh and write them as :data:`SEED` next to
-    it (for the running Lark and Python); returns the path written."""
-    import io
-
-    text = _grammar_text()
-    buf = io.BytesIO()
-    Lark(text, cache=False, **_OPTIONS).save(buf)
-    target = str(importlib.resources.files("iterplan_compiler.grammar").joinpath(SEED))
-    atomic_write_bytes(target, seed_header(text) + buf.getvalue())
-    return target
 
 
 _DOT_RE = re.compile(r'//[^\n]*|/\*.*?\*/|"[^"\n]*"|\d\.\d|\.\.|\.(?![A-Za-z_\[{])', re.S)
