@@ -48,6 +48,7 @@ from iterplan_compiler.symbolic.bdd import (
     value_cubes,
 )
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
+from iterplan_compiler.synthesis.recode import ERROR_BIT
 
 ORDERS = ("action_first", "clustered", "action_last", "blocked")
 #: see :meth:`SymbolicGame._cluster`
@@ -148,11 +149,39 @@ class SymbolicGame:
             self.cur = [BitVec(n) for n in cur_names]
             self.nxt = [BitVec(n) for n in nxt_names]
             return
+        if self.spec.bit_keys and order == "clustered":
+            self._declare_by_keys(widths)
+            return
         vecs: dict[int, tuple[BitVec, BitVec]] = {}
         for k in self._declaration_order(order):
             vecs[k] = declare_interleaved(b, f"s{k}", widths[k])
         self.cur = [vecs[k][0] for k in range(len(widths))]
         self.nxt = [vecs[k][1] for k in range(len(widths))]
+
+    def _declare_by_keys(self, widths: list[int]) -> None:
+        """Variables of recoded machines (:mod:`recode`): a feature bit is the *shared*
+        variable of its fluent (every machine tracking the same fluent, same initial value,
+        reads the same variable — their copies agree on every reachable state, so only
+        unreachable states are dropped); residual and error bits are the machine's own.
+        Declared component by component (``clustered`` order), each shared variable where
+        it is first used; current/next interleaved."""
+        b = self.bdd
+        keys = self.spec.bit_keys
+        shared: dict[str, str] = {}
+        cur: dict[int, list[str]] = {k: [] for k in range(len(widths))}
+        for k in self._declaration_order("clustered"):
+            for i, key in enumerate(keys[k]):
+                if key is None or key == ERROR_BIT:
+                    name = f"s{k}_{i}"
+                elif key in shared:
+                    cur[k].append(shared[key])
+                    continue
+                else:
+                    name = shared[key] = f"f{len(shared)}"
+                b.declare(name, name + "'")
+                cur[k].append(name)
+        self.cur = [BitVec(tuple(cur[k])) for k in range(len(widths))]
+        self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
 
     def _declaration_order(self, order: str) -> list[int]:
         """Component order in the BDD: given order, or (``clustered``) each fluent monitor
@@ -177,6 +206,11 @@ class SymbolicGame:
 
     # -- construction -------------------------------------------------------------------
 
+    def _error_bit(self, k: int) -> bool:
+        """Component ``k`` was recoded with a top error bit (:mod:`recode`)."""
+        keys = self.spec.bit_keys
+        return bool(keys) and keys[k][-1:] == (ERROR_BIT,)
+
     def _component_relation(self, k: int, c: LTS) -> dict[str, Node]:
         """``{label: R(s_k, s_k')}`` for every label component ``k`` moves on."""
         b = self.bdd
@@ -198,11 +232,14 @@ class SymbolicGame:
         valid, err, init = b.true, b.false, b.true
         rels = []
         for k, c in enumerate(comps):
-            valid &= self.cur[k].less_than(b, c.num_states + (1 if c.has_error else 0))
             init &= self.cur[k].eq(b, c.initial)
             code = self.err_code[k]
-            if code is not None:
-                err |= self.cur[k].eq(b, code)
+            if self._error_bit(k):  # recoded: every code with the error bit set is ERROR
+                err |= b.var(self.cur[k].names[-1])
+            else:
+                valid &= self.cur[k].less_than(b, c.num_states + (1 if c.has_error else 0))
+                if code is not None:
+                    err |= self.cur[k].eq(b, code)
             rels.append(self._component_relation(k, c))
         self.valid, self.error, self.init = valid, err & valid, init
         self.live = valid & ~err
