@@ -2,7 +2,10 @@
 
 Encoding.  Component *k* (a plant leaf, a safety machine, a fluent monitor — see
 :mod:`encode`) gets ``bits_for(n_k + e_k)`` current/next variable pairs, where ``e_k = 1`` if it
-has ERROR moves: code ``n_k`` then stands for its ERROR state.  No product is ever built
+has ERROR moves: code ``n_k`` then stands for its ERROR state (a machine recoded by
+:mod:`recode` instead has fluent-aligned codes: its feature bits are variables *shared* with
+every machine tracking the same fluent, and its top bit is an error bit — every code with it
+set is ERROR; see :meth:`SymbolicGame._declare_by_keys`).  No product is ever built
 explicitly, and neither is a monolithic transition relation: the relation is kept
 *partitioned by action* —
 
