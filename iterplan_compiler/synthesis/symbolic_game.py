@@ -45,6 +45,7 @@ from iterplan_compiler.symbolic.bdd import (
     BitVec,
     and_exists,
     bits_for,
+    cofactor,
     declare_interleaved,
     disjoin,
     new_manager,
@@ -362,6 +363,32 @@ class SymbolicGame:
         xg: list[Node] = []
         good = disjoin(b, [self._pre(g, X, xg) for g in self.groups if g.controllable])
         return (self.env & ~env_bad) | (self.ctrl_owned & good)
+
+    def _pre_of(self, controllable: bool, X: Node) -> Node:
+        """``∃s'. T ∧ X'`` over the groups of one controllability."""
+        xn: list[Node] = []
+        return disjoin(self.bdd, [self._pre(g, X, xn) for g in self.groups
+                                  if g.controllable == controllable])
+
+    def cpre_lost(self, X: Node, removed: Node, within: Node) -> Node:
+        """States of ``within`` ⊆ ``CPre(X ∪ removed)`` outside ``CPre(X)``
+        (:class:`fixpoint.FrontierPredecessor`).
+
+        By the definition of :meth:`cpre`: an environment state of ``within`` had all its
+        uncontrollable successors in ``X ∪ removed``, so it leaves iff one is in ``removed``;
+        a controller state had a controllable successor in ``X ∪ removed``, so only those
+        with one in ``removed`` (``cand``) need the check "some controllable successor in
+        ``X``", which looks at successors of ``cand`` only — hence ``X`` may be replaced by
+        its generalised cofactor on them (smaller, equal where it is read)."""
+        b = self.bdd
+        env_lost = within & self.env & self._pre_of(False, removed)
+        cand = within & self.ctrl_owned & self._pre_of(True, removed)
+        if cand == b.false:
+            return env_lost
+        succ = disjoin(b, [b.let(g.unprime, and_exists(b, g.rel, cand, g.cur_vars))
+                           for g in self.groups if g.controllable])
+        keep = cand & self._pre_of(True, cofactor(b, X & self.live, succ))
+        return env_lost | (cand & ~keep)
 
     def restrict(self, care: Node) -> None:
         """Restrict the framed relations to ``care`` (e.g. the reachable states) at both
