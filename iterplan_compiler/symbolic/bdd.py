@@ -83,6 +83,14 @@ def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
     return bdd.exist(qv, u & v)
 
 
+def cofactor(bdd: Manager, u: Node, care: Node) -> Node:
+    """A function equal to ``u`` on ``care`` (values outside are unspecified), usually with
+    fewer nodes: CUDD's generalised cofactor ``Cudd_bddRestrict``; ``u`` itself elsewhere."""
+    if _cudd is not None and backend_of(bdd) == "cudd":
+        return _cudd.restrict(u, care)
+    return u
+
+
 def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
     """``∀ qvars. u ∨ v`` — CUDD's fused operator when available (dual of :func:`and_exists`)."""
     qv = set(qvars)

@@ -72,6 +72,9 @@ class GameSpec:
     failures: tuple[Formula, ...]
     mode: str = "gr1"
     warnings: tuple[str, ...] = field(default=())
+    #: per component, per code bit (LSB first): the feature key of that bit or None
+    #: (:mod:`recode`; empty: no keys, the plain order)
+    bit_keys: tuple[tuple[str | None, ...], ...] = field(default=())
 
     @property
     def alphabet(self) -> frozenset[str]:

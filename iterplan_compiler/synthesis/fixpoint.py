@@ -57,6 +57,17 @@ Optimisations (each sound by monotonicity of the operators; switches in
   order, so ``keep_iterates=True`` uses that order.
 * *trivial assumptions* — for ``A_i = TRUE`` the ``νX`` body does not depend on ``X``:
   one evaluation, no ``CPre(X)`` (halves the ``CPre`` calls on the lift).
+* *frontier νX* (only with a :class:`FrontierPredecessor`) — ``νX`` descends: ``X_{k+1} =
+  X_k ∩ step(X_k)``.  A state of ``X_k`` outside ``base`` is in ``¬A_i ∩ CPre(X_{k-1})``, and
+  by the definition of CPre its membership can change only if one of its successors was just
+  removed (``D = X_{k-1} ∖ X_k``): an environment state leaves iff some uncontrollable
+  successor is in ``D``, a controller state iff it had a controllable successor in ``D`` and
+  has none left in ``X_k``.  So ``X_{k+1} = X_k ∖ cpre_lost(X_k, D, X_k ∖ base)`` — the
+  same set, from preimages of the (small) ``D`` instead of a CPre of the (large) ``X_k``.
+  Used once ``D`` has under ``1/frontier_ratio`` of ``X_k``'s nodes.  GyroLTL_637, first
+  νX (``|X|`` ≈ 90 k nodes): with ``|X|/|D|`` = 1.0–2.4 a frontier step cost 1.8–3.7× a
+  full one, at 3.6 0.8×, from 14 up 0.3× to 0.05× (the long tail of small ``D``), hence 4;
+  the νX went from 26 full CPre (~35 s) to 7 full CPre and a frontier tail (~10 s).
 * *memoised CPre* — ``CPre(Z)`` is the first ``νX`` step for every ``(r, i)`` and
   ``CPre(∅)`` the first ``Y`` base; canonical BDD nodes make a cache keyed by node exact.
   ``memo`` bounds it (least recently used out): an unbounded cache keeps every argument
@@ -106,16 +117,29 @@ class TransitionPredecessor(Predecessor, Protocol):
         ...
 
 
+@runtime_checkable
+class FrontierPredecessor(Predecessor, Protocol):
+    """A game that can update CPre after its argument shrank (module doc: frontier νX)."""
+
+    def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
+        """The states of ``within`` (a subset of ``CPre(states ∪ removed)``) that are not in
+        ``CPre(states)``."""
+        ...
+
+
 @dataclass(frozen=True)
 class EngineOptions:
     """Switches of the optimisations in the module docstring (all keep the result exact).
 
-    ``memo``: CPre cache size (``None`` unbounded, ``0`` off)."""
+    ``memo``: CPre cache size (``None`` unbounded, ``0`` off); ``frontier_ratio``: frontier
+    νX steps once ``|D| · ratio < |X|`` in nodes (``0`` off; needs a
+    :class:`FrontierPredecessor`)."""
 
     feedback: bool = True
     recycle: bool = True
     chained: bool = True
     memo: int | None = None
+    frontier_ratio: int = 4
 
 
 #: the slugs head-to-head defaults (measured on ``benchmarks/gr1/run.py``, see docs/gr1.md)
@@ -164,8 +188,10 @@ class _Memo:
 class _StateOp:
     """The STATE-kind operator: ``νX. goal ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))``, inside ``Z``."""
 
-    def __init__(self, bdd: Any, cpre: Callable[[Node], Node]) -> None:
-        self.bdd, self.cpre = bdd, cpre
+    def __init__(self, bdd: Any, cpre: Callable[[Node], Node],
+                 lost: Callable[[Node, Node, Node], Node] | None = None, ratio: int = 0
+                 ) -> None:
+        self.bdd, self.cpre, self.lost, self.ratio = bdd, cpre, lost, ratio
 
     def goal(self, g: Node, Z: Node) -> Node:
         return g & self.cpre(Z)
@@ -182,6 +208,14 @@ class _StateOp:
     def floor(self, base: Node, Z: Node) -> Node:
         """A state set inside ``Z`` that every ``νX`` value contains."""
         return base & Z
+
+    def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
+        """``step(X) ∧ start`` for ``X = step(prev) ∧ start ⊆ prev`` (frontier νX)."""
+        if self.lost is not None:
+            removed = prev & ~X
+            if len(removed) * self.ratio < len(X):
+                return X & ~self.lost(X, removed, X & ~base)
+        return self.x_step(base, not_a, X) & start
 
 
 class _TransitionOp:
@@ -205,6 +239,9 @@ class _TransitionOp:
         """A state set inside ``Z`` that every ``νX`` value contains (``base`` is
         transition-level here, so: none)."""
         return self.bdd.false
+
+    def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
+        return self.x_step(base, not_a, X) & start
 
 
 _Op = _StateOp | _TransitionOp
@@ -253,7 +290,9 @@ def _operator(bdd: Any, pre: Predecessor, goals: GoalKind, options: EngineOption
         if not isinstance(pre, TransitionPredecessor):
             raise TypeError("transition goals need a TransitionPredecessor (prime, cpre_trans)")
         return _TransitionOp(bdd, pre)
-    return _StateOp(bdd, _Memo(pre.cpre, options.memo))
+    lost = pre.cpre_lost if (isinstance(pre, FrontierPredecessor)
+                             and options.frontier_ratio > 0) else None
+    return _StateOp(bdd, _Memo(pre.cpre, options.memo), lost, options.frontier_ratio)
 
 
 def _feedback_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
@@ -395,13 +434,14 @@ def _nu_x(bdd: Any, op: _Op, base: Node, not_a: Node, start: Node,
     X = op.x_step(base, not_a, start) & start
     if not_a == bdd.false:
         return X
+    prev = start
     while X != bdd.false:
         limits.check_deadline()
         stats["x"] += 1
-        x_new = op.x_step(base, not_a, X) & start
+        x_new = op.x_next(base, not_a, X, prev, start)
         if x_new == X:
             break
-        X = x_new
+        prev, X = X, x_new
     return X
 
 
@@ -415,6 +455,18 @@ class _CallablePre:
         return self._cpre(states)
 
 
+class _CallableFrontierPre(_CallablePre):
+    """``cpre`` and ``cpre_lost`` functions as a :class:`FrontierPredecessor`."""
+
+    def __init__(self, cpre: Callable[[Node], Node],
+                 lost: Callable[[Node, Node, Node], Node]) -> None:
+        super().__init__(cpre)
+        self._lost = lost
+
+    def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
+        return self._lost(states, removed, within)
+
+
 def gr1_winning(
     bdd: Any,
     cpre: Callable[[Node], Node],
@@ -426,10 +478,13 @@ def gr1_winning(
     must_contain: Node | None = None,
     progress: Callable[[str], None] | None = None,
     memo: bool = True,
+    cpre_lost: Callable[[Node, Node, Node], Node] | None = None,
+    frontier_ratio: int = EngineOptions.frontier_ratio,
 ) -> Gr1Fixpoint:
     """:func:`solve_gr1` with a ``cpre`` function, state goals and the MTSA defaults
     (recycling, chained ``μY``, unbounded memo); ``must_contain`` — stop once
-    ``Z ∧ must_contain = ∅``.  ``memo=False`` if ``cpre`` is not a pure function."""
+    ``Z ∧ must_contain = ∅``.  ``memo=False`` if ``cpre`` is not a pure function;
+    ``cpre_lost`` (see :class:`FrontierPredecessor`) enables the frontier νX."""
     lost = None
     if must_contain is not None:
         mc = must_contain
@@ -437,6 +492,8 @@ def gr1_winning(
         def lost(Z: Node) -> bool:
             return bool((Z & mc) == bdd.false)
 
-    return solve_gr1(bdd, _CallablePre(cpre), assumptions, guarantees, care=care,
+    pre = _CallablePre(cpre) if cpre_lost is None else _CallableFrontierPre(cpre, cpre_lost)
+    return solve_gr1(bdd, pre, assumptions, guarantees, care=care,
                      keep_iterates=keep_iterates, lost=lost, progress=progress,
-                     options=EngineOptions(memo=None if memo else 0))
+                     options=EngineOptions(memo=None if memo else 0,
+                                           frontier_ratio=frontier_ratio))

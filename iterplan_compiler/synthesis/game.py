@@ -19,6 +19,7 @@ from iterplan_compiler.ir.lts import ERROR, LTS
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
+from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import extract_director
 from iterplan_compiler.synthesis.symbolic_game import ORDERS, SymbolicGame, quotient_leaves
 from iterplan_compiler.synthesis.symbolic_strategy import symbolic_controller
@@ -119,8 +120,10 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
 
     With ``quotient`` the body machines are first replaced by their bisimulation quotients
-    (:func:`symbolic_game.quotient_leaves`); an unrealizable game to be explained is then
-    solved again without, so the counter-strategy trace names the machines' own states."""
+    (:func:`symbolic_game.quotient_leaves`) and, in the ``clustered`` order, renumbered to
+    fluent-aligned codes (:func:`recode.recode_leaves`); an unrealizable game to be explained
+    is then solved again without either, so the counter-strategy trace names the machines'
+    own states."""
     t = time.perf_counter()
     if quotient and spec.mode == "gr1":  # the director (§3.9) is ranked explicitly as is
         qspec = quotient_leaves(spec)
@@ -128,6 +131,10 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
             stats["body_quotient_states"] = [c.num_states
                                              for c in qspec.components[:_nbody(spec)]]
+        if order == "clustered":
+            # fluent-aligned codes, shared fluent variables (recode.py): the same game
+            qspec = recode_leaves(qspec)
+        if qspec is not spec:
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
                                            quotient=False)
@@ -161,7 +168,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
         return _solve_nonblocking(g, care, stats, explain, name, t)
     goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
     fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live,
-                     must_contain=g.init, progress=say)
+                     must_contain=g.init, progress=say, cpre_lost=g.cpre_lost)
     W = fp.winning & care
     stats["t_solve"] = time.perf_counter() - t
     stats["fixpoint_iterations"] = fp.iterations

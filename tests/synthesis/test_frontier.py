@@ -1,0 +1,65 @@
+"""The frontier νX (fixpoint.FrontierPredecessor, SymbolicGame.cpre_lost): ``cpre_lost``
+against its definition on random sets, and the engine with and without it."""
+
+from __future__ import annotations
+
+import random
+
+from hypothesis import HealthCheck, given, settings
+from test_agreement import problems
+from test_symbolic_bdd import _door_patrol
+
+from iterplan_compiler.synthesis.encode import prepare
+from iterplan_compiler.synthesis.fixpoint import gr1_winning
+from iterplan_compiler.synthesis.recode import recode_leaves
+from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
+
+
+def _random_subset(g, u, rng):
+    """A random subset of ``u`` (each satisfying assignment kept with probability 1/2)."""
+    out = g.bdd.false
+    for a in g.bdd.pick_iter(u, care_vars=g.cur_vars):
+        if rng.random() < 0.5:
+            out |= g.bdd.cube(a)
+    return out
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_cpre_lost_is_the_difference_of_cpres(prob):
+    """``cpre_lost(X, D, W) = W \\ CPre(X)`` for every ``W ⊆ CPre(X ∪ D)``."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        reach = g.reachable() & g.live
+        rng = random.Random(0)
+        for _ in range(4):
+            old = _random_subset(g, reach, rng)
+            X = _random_subset(g, old, rng)
+            within = _random_subset(g, g.cpre(old) & reach, rng)
+            got = g.cpre_lost(X, old & ~X, within)
+            assert got == within & ~g.cpre(X)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_frontier_keeps_the_winning_region(prob):
+    g = SymbolicGame(prepare(prob))
+    reach = g.reachable() & g.live
+    goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
+    plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach)
+    for ratio in (1, 8):
+        fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
+                           cpre_lost=g.cpre_lost, frontier_ratio=ratio)
+        assert fast.winning == plain.winning
+        assert fast.iterations == plain.iterations  # the same iterates, step by step
+
+
+def test_frontier_on_door_patrol():
+    g = SymbolicGame(prepare(_door_patrol(4)))
+    reach = g.reachable()
+    goals = [gj | g.failures for gj in g.guarantees]
+    plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach, frontier_ratio=0)
+    fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
+                       cpre_lost=g.cpre_lost, frontier_ratio=1)
+    assert fast.winning == plain.winning and fast.iterations == plain.iterations
+    assert (fast.winning & g.init) != g.bdd.false
