@@ -233,6 +233,10 @@ def main(spec_path: str) -> int:
                 # A second mission through SERIAL1 while the aircraft is still flying.
                 obs.close()
                 obs = None
+                # SITL's TCP serial port takes one client and listens again only once it has
+                # seen the observer go; connecting at once could sit in the listen backlog
+                # with no heartbeat (seen once under load: "no autopilot heartbeat").
+                time.sleep(2.0)
                 proc2 = iterc_run({**spec, "args": second}, port1, work / "out2", [])
                 result["second"] = finish(proc2, spec.get("wall", 240))
                 result["second"].update(outputs(work / "out2"))
