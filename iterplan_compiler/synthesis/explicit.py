@@ -86,15 +86,15 @@ class ProductMoves:
                 if parts[0] != k0:
                     continue
                 self._sync(cur, a, parts, out)
-        for k in range(self.n):
-            for t in idx[k].get(cur[k], {}).get(TAU, ()):
-                if t == ERROR:
-                    out.append((TAU, None))
-                else:
-                    nxt = list(cur)
-                    nxt[k] = t
-                    out.append((TAU, tuple(nxt)))
+        self._tau_moves(cur, out)
         return out
+
+    def _tau_moves(self, cur: tuple[int, ...],
+                   out: list[tuple[str, tuple[int, ...] | None]]) -> None:
+        """Each component's own ``tau`` moves from ``cur`` (after the synchronised ones)."""
+        for k in range(self.n):
+            for t in self.idx[k].get(cur[k], {}).get(TAU, ()):
+                out.append((TAU, None if t == ERROR else with_locals(cur, (k,), (t,))))
 
     def _sync(self, cur: tuple[int, ...], a: str, parts: list[int],
               out: list[tuple[str, tuple[int, ...] | None]]) -> None:
@@ -106,13 +106,16 @@ class ProductMoves:
                 return
             choices.append(ts)
         for combo in _cartesian(*choices):
-            if ERROR in combo:
-                out.append((a, None))
-                continue
-            nxt = list(cur)
-            for k, t in zip(parts, combo, strict=True):
-                nxt[k] = t
-            out.append((a, tuple(nxt)))
+            out.append((a, None if ERROR in combo else with_locals(cur, parts, combo)))
+
+
+def with_locals(cur: tuple[int, ...], parts: Sequence[int], local: Sequence[int]
+                ) -> tuple[int, ...]:
+    """``cur`` with component ``parts[i]`` in local state ``local[i]``."""
+    nxt = list(cur)
+    for k, t in zip(parts, local, strict=True):
+        nxt[k] = t
+    return tuple(nxt)
 
 
 def explore_product(

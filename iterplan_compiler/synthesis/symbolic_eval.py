@@ -29,6 +29,7 @@ from typing import Any
 
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU
 from iterplan_compiler.symbolic.bdd import BitVec, disjoin
+from iterplan_compiler.synthesis.explicit import ProductMoves, with_locals
 
 Node = Any
 State = tuple[int, ...]
@@ -145,34 +146,23 @@ class RankTable:
         return value
 
 
-class CachedMoves:
+class CachedMoves(ProductMoves):
     """The moves of a synchronous product (§2.5) from a component-state tuple, with the
     synchronisation of each action memoised per local states of its owners (module doc).
     Same moves, in the same order, as :meth:`explicit.ProductMoves.moves`."""
 
     def __init__(self, components: Sequence[LTS]) -> None:
-        self.n = len(components)
-        self.start: State = tuple(c.initial for c in components)
-        owners: dict[str, list[int]] = {}
-        for k, c in enumerate(components):
-            for a in c.alphabet:
-                owners.setdefault(a, []).append(k)
-        self.owners = {a: tuple(ks) for a, ks in owners.items()}
-        self.idx: list[dict[int, dict[str, list[int]]]] = []
-        for c in components:
-            out: dict[int, dict[str, list[int]]] = {}
-            for s, a, t in c.transitions:
-                out.setdefault(s, {}).setdefault(a, []).append(t)
-            self.idx.append(out)
+        super().__init__(components)
+        self._parts = {a: tuple(ks) for a, ks in self.owners.items()}
         # (component, local state) -> the non-tau actions it enables as their first owner,
         # each with its owners and a getter of their local states
         self._first: dict[tuple[int, int], list[tuple[str, tuple[int, ...], Any]]] = {}
-        self._sync: dict[tuple[str, Any], list[tuple[int, ...] | None]] = {}
+        self._memo: dict[tuple[str, Any], list[tuple[int, ...] | None]] = {}
 
     def _firsts(self, k: int, s: int) -> list[tuple[str, tuple[int, ...], Any]]:
         r = self._first[(k, s)] = [
-            (a, self.owners[a], itemgetter(*self.owners[a]))
-            for a in self.idx[k].get(s, {}) if a != TAU and self.owners[a][0] == k]
+            (a, self._parts[a], itemgetter(*self._parts[a]))
+            for a in self.idx[k].get(s, {}) if a != TAU and self._parts[a][0] == k]
         return r
 
     def _combos(self, a: str, parts: tuple[int, ...], key: tuple[str, Any]
@@ -185,12 +175,12 @@ class CachedMoves:
                 choices = []
                 break
             choices.append(ts)
-        r = self._sync[key] = _cartesian(choices) if choices else []
+        r = self._memo[key] = _cartesian(choices) if choices else []
         return r
 
     def moves(self, cur: State) -> list[Move]:
         out: list[Move] = []
-        first, sync = self._first, self._sync
+        first, sync = self._first, self._memo
         for k0 in range(self.n):
             fs = first.get((k0, cur[k0]))
             if fs is None:
@@ -201,21 +191,8 @@ class CachedMoves:
                 if combos is None:
                     combos = self._combos(a, parts, key)
                 for combo in combos:
-                    if combo is None:
-                        out.append((a, None))
-                        continue
-                    nxt = list(cur)
-                    for k, t in zip(parts, combo, strict=True):
-                        nxt[k] = t
-                    out.append((a, tuple(nxt)))
-        for k in range(self.n):
-            for t in self.idx[k].get(cur[k], {}).get(TAU, ()):
-                if t == ERROR:
-                    out.append((TAU, None))
-                else:
-                    nxt = list(cur)
-                    nxt[k] = t
-                    out.append((TAU, tuple(nxt)))
+                    out.append((a, None if combo is None else with_locals(cur, parts, combo)))
+        self._tau_moves(cur, out)
         return out
 
 
