@@ -129,3 +129,30 @@ class NamedFormula:
     formula: Formula
     extra_alphabet: frozenset[str] = frozenset()
     span: Span = field(default=NO_SPAN, compare=False)
+
+
+_BINARY: dict[type, str] = {And: "&&", Or: "||", Implies: "->", Iff: "<->", Until: "U",
+                            WeakUntil: "W"}
+_UNARY: dict[type, str] = {Not: "!", Next: "X ", Always: "[]", Eventually: "<>"}
+
+
+def show(f: Formula) -> str:
+    """``f`` in FLTL syntax (names as in the spec; every compound operand parenthesised)."""
+    if isinstance(f, FluentProp):
+        return f.name
+    if isinstance(f, ActionProp):
+        acts = sorted(f.actions)
+        return acts[0] if len(acts) == 1 else "{" + ", ".join(acts) + "}"
+    if isinstance(f, Const):
+        return "true" if f.value else "false"
+    if type(f) in _UNARY:
+        return f"{_UNARY[type(f)]}{_operand(f.arg)}"  # type: ignore[attr-defined]
+    if type(f) in _BINARY:
+        return (f"{_operand(f.left)} {_BINARY[type(f)]} "  # type: ignore[attr-defined]
+                f"{_operand(f.right)}")  # type: ignore[attr-defined]
+    return type(f).__name__
+
+
+def _operand(f: Formula) -> str:
+    text = show(f)
+    return text if isinstance(f, (FluentProp, ActionProp, Const)) else f"({text})"

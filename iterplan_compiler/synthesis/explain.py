@@ -27,22 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from iterplan_compiler.ir.formulas import (
-    ActionProp,
-    Always,
-    And,
-    Const,
-    Eventually,
-    FluentProp,
-    Formula,
-    Iff,
-    Implies,
-    Next,
-    Not,
-    Or,
-    Until,
-    WeakUntil,
-)
+from iterplan_compiler.ir.formulas import show as show_formula
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.synthesis.encode import GameSpec
 from iterplan_compiler.synthesis.explicit import ExplicitGame
@@ -62,31 +47,6 @@ def losing_count(game: ExplicitGame, win: frozenset[int]) -> tuple[int, int]:
     """``(losing, total)`` over the reachable non-ERROR states of ``game``."""
     states = [s for s in range(game.num_states) if s != game.error]
     return sum(1 for s in states if s not in win), len(states)
-
-
-def show_formula(f: Formula) -> str:
-    """A formula in FLTL syntax (names as in the spec)."""
-    binary = {And: "&&", Or: "||", Implies: "->", Iff: "<->", Until: "U", WeakUntil: "W"}
-    unary = {Not: "!", Next: "X ", Always: "[]", Eventually: "<>"}
-    if isinstance(f, FluentProp):
-        return f.name
-    if isinstance(f, ActionProp):
-        acts = sorted(f.actions)
-        return acts[0] if len(acts) == 1 else "{" + ", ".join(acts) + "}"
-    if isinstance(f, Const):
-        return "true" if f.value else "false"
-    for cls, op in unary.items():
-        if isinstance(f, cls):
-            return f"{op}{_wrap(f.arg)}"  # type: ignore[attr-defined]
-    for kind, op in binary.items():
-        if isinstance(f, kind):
-            return f"{_wrap(f.left)} {op} {_wrap(f.right)}"  # type: ignore[attr-defined]
-    return type(f).__name__
-
-
-def _wrap(f: Formula) -> str:
-    text = show_formula(f)
-    return text if isinstance(f, (FluentProp, ActionProp, Const)) else f"({text})"
 
 
 # --------------------------------------------------------------------------------------------
