@@ -26,6 +26,7 @@ import sys
 from pathlib import Path
 
 from iterplan_compiler import outputs
+from iterplan_compiler.commands.run import add_arrival_arguments
 
 HELP = "reproduce the paper's Fig. 3 experiments"
 CHOICES = ("fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table", "all")
@@ -61,16 +62,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fast-skip", action="store_true",
                         help="fig3b: the runtime's fast skip of the controller's skip cycles "
                              "(same controller behaviour, less iteration overhead)")
-    parser.add_argument("--headings", choices=("parallel", "grid"), default=None,
-                        help="admissible arrival headings for every sorter (default: the "
-                             "paper's, parallel to the map's direction; tour on Cover: its "
-                             "planned ones)")
-    parser.add_argument("--heading-choice", choices=("shortest", "lookahead", "repeat"),
-                        default=None,
-                        help="arrival heading per leg for every sorter (default: the "
-                             "paper's shortest; tour on Cover: lookahead); repeat: the heading "
-                             "that also shortens the legs that followed this location the last "
-                             "time (a patrol's loop, learnt by watching)")
+    # for every sorter; default: the paper's, and for tour on Cover its planned headings
+    add_arrival_arguments(parser, paper_default=False)
     parser.add_argument("--warmup", type=int, default=0, metavar="LOOPS",
                         help="fig3b: patrol loops flown before the measured ones (default 0: "
                              "the paper's, the first loop is measured)")

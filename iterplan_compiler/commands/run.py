@@ -33,6 +33,24 @@ HELP = "run a generated controller on the simulator or a MAVLink vehicle"
 SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
 
 
+def add_arrival_arguments(parser: argparse.ArgumentParser, *, paper_default: bool) -> None:
+    """``--headings`` and ``--heading-choice`` (the planner's arrival rule, values of the
+    ``ArrivalHeadings`` / ``HeadingChoice`` enums).  ``paper_default``: default to the paper's
+    rule; else None, for callers with their own defaults (``iterc experiment``)."""
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
+
+    parser.add_argument("--headings", choices=[h.value for h in ArrivalHeadings],
+                        default=ArrivalHeadings.PARALLEL.value if paper_default else None,
+                        help="admissible arrival headings: parallel to the map's direction "
+                             "(the paper's), or along either grid axis")
+    parser.add_argument("--heading-choice", choices=[c.value for c in HeadingChoice],
+                        default=HeadingChoice.SHORTEST.value if paper_default else None,
+                        help="arrival heading per leg: the shortest path (the paper's), the "
+                             "one that also shortens the next leg (the tour's planned heading "
+                             "with --sorter tour), or repeat: the one that also shortens the "
+                             "legs that followed this location the last time (patrols)")
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     _add_mission_arguments(parser)
     _add_flight_arguments(parser)
@@ -58,15 +76,7 @@ def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
                         help="order of the locations: the paper's distance (greedy Dubins), "
                              "last, random; or tour (a planned tour over the cells the map's "
                              "sensors mark, docs/runtime.md)")
-    parser.add_argument("--headings", choices=("parallel", "grid"), default="parallel",
-                        help="admissible arrival headings: parallel to the map's direction "
-                             "(the paper's), or along either grid axis")
-    parser.add_argument("--heading-choice", choices=("shortest", "lookahead", "repeat"),
-                        default="shortest",
-                        help="arrival heading per leg: the shortest path (the paper's), the "
-                             "one that also shortens the next leg (the tour's planned heading "
-                             "with --sorter tour), or repeat: the one that also shortens the "
-                             "legs that followed this location the last time (patrols)")
+    add_arrival_arguments(parser, paper_default=True)
     parser.add_argument("--seed", type=int, default=0, help="seed for the random sorter and sim")
     parser.add_argument("--ideal-compute", action="store_true",
                         help="do not charge planning compute time to the simulated clock")
