@@ -321,11 +321,7 @@ class SymbolicGame:
                 continue
             rel = b.false
             for g in part:
-                framed = g.rel
-                for k in range(len(self.cur)):
-                    if k not in g.owners:
-                        framed &= self.cur[k].equal_to(b, self.nxt[k])
-                rel |= framed
+                rel |= g.rel & self.framed_to(g.cur_vars)
                 if len(rel) > CLUSTER_MAX_NODES:
                     break
             else:
@@ -336,6 +332,24 @@ class SymbolicGame:
                 continue
             out.extend(part)
         return out
+
+    def framed_to(self, moved: frozenset[str]) -> Node:
+        """The frame ``∧_{v ∉ moved} v' = v``: every current variable *outside* ``moved``
+        (a group's ``cur_vars``) keeps its value.
+
+        Framed per *variable*, not per machine: with shared fluent variables
+        (:meth:`_declare_by_keys`) a machine outside the group may read a variable that an
+        owner writes.  Sharers agree on the fluent's own moves (its actions are in both
+        alphabets), but an owner's ERROR move clears its feature bits (ERROR is the error
+        bit alone, :mod:`recode`); framing the non-owner's bits then demanded ``f' = f``
+        and dropped that move — on GyroLTL_637, and on the spec of
+        ``tests/synthesis/test_framing.py``, an uncontrollable move to ERROR vanished and
+        the symbolic game called a losing state winning."""
+        b = self.bdd
+        u = b.true
+        for v in self.cur_vars - moved:
+            u &= b.var(v).equiv(b.var(self.prime[v]))
+        return u
 
     # -- operators ----------------------------------------------------------------------
 
