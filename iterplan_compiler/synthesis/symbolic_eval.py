@@ -50,10 +50,18 @@ class CompiledSets:
         self.shift: list[int] = [0]
         self.lo: list[int] = [0]
         self.hi: list[int] = [0]
+        # node id -> table index.  A node id is the node's address (``dd.cudd``) or its
+        # slot (``dd.autoref``), which the library reuses for another node once the first
+        # is freed: every compiled BDD is therefore held for the lifetime of the tables, so
+        # no id in ``_ids`` can come to name a different node (a freed and reused id used to
+        # hand a later set the table of an earlier one: wrong ranks in the controller).
         self._ids: dict[int, int] = {}
+        self._alive: list[Node] = []
 
     def add(self, u: Node) -> int:
-        """Compile ``u`` (a BDD over the current bits only); its root reference."""
+        """Compile ``u`` (a BDD over the current bits only); its root reference.  ``u`` is
+        kept alive as long as these tables (see ``_ids``)."""
+        self._alive.append(u)
         return self._ref(u)
 
     def _ref(self, f: Node) -> int:

@@ -91,6 +91,56 @@ def test_rank_table_is_first_layer(backend, seed):
         assert table.rank(s) == want, s
 
 
+
+def _churn(bdd, vecs, rng):
+    """Free what nobody holds and let the library reuse its node ids: ``dd.autoref``
+    collects on request; CUDD collects (and then recycles node addresses) once enough dead
+    nodes pile up, so make ~200 garbage sets."""
+    if hasattr(bdd, "collect_garbage"):
+        bdd.collect_garbage()
+        return
+    names = [n for vec in vecs for n in vec.names]
+    for _ in range(200):
+        u = bdd.false
+        for _ in range(12):
+            cube = bdd.true
+            for name in names:
+                r = rng.random()
+                if r < 0.4:
+                    cube &= bdd.var(name)
+                elif r < 0.8:
+                    cube &= ~bdd.var(name)
+            u |= cube
+        del u
+
+
+@pytest.mark.parametrize("backend", ["cudd", "autoref"])
+@pytest.mark.parametrize("seed", range(2))
+def test_compiled_sets_survive_garbage_collection(backend, seed):
+    """Regression: the tables are keyed by node id, and a BDD compiled from a temporary
+    (as RankTable's rank graph is) used to be freed; after a garbage collection its ids
+    named other nodes, so a set compiled later was answered with an earlier set's table."""
+    import gc
+
+    bdd = _manager(backend)
+    rng = random.Random(seed)
+    widths = [4, 3, 4, 3]
+    vecs: list[BitVec] = [declare_interleaved(bdd, f"s{k}", w)[0] for k, w in enumerate(widths)]
+    sets = CompiledSets(bdd, vecs)
+    for _ in range(6):
+        sets.add(_random_set(bdd, vecs, rng, 10))  # nobody else holds these
+        gc.collect()
+        _churn(bdd, vecs, rng)
+    kept = [_random_set(bdd, vecs, rng, 10) for _ in range(10)]
+    roots = [sets.add(u) for u in kept]
+    for s in _states(widths)[::7]:
+        point: dict[str, bool] = {}
+        for vec, v in zip(vecs, s, strict=True):
+            point.update(vec.assign(v))
+        for u, root in zip(kept, roots, strict=True):
+            assert sets.member(root, s) == (bdd.let(point, u) == bdd.true), s
+
+
 def test_cached_moves_are_product_moves():
     a = make_lts("A", 3, [(0, "x", 1), (1, "y", 2), (2, "x", 0), (1, "tau", 0), (0, "z", -1)],
                  {"x", "y", "z"})
