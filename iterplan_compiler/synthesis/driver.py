@@ -89,6 +89,7 @@ class SynthesisStats(Mapping[str, object]):
     winning_bdd_nodes: int | None = None
     peak_bdd_nodes: int | None = None
     fixpoint_iterations: int | None = None
+    verdict_at: float | None = None  # seconds from the start until the fixpoint decided
     bdd_backend: str | None = None
     order: str | None = None
     times: tuple[tuple[str, float], ...] = ()
@@ -224,7 +225,8 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
             from iterplan_compiler.synthesis.game import solve_symbolic
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
-                                    order=order.value, permissive=problem.permissive)
+                                    order=order.value, permissive=problem.permissive,
+                                    started=t0)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
         return _Outcome(False, None, None, msg, (error("E0908", msg, problem.span),))

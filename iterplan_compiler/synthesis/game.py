@@ -115,16 +115,22 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
                    explain: bool, name: str, order: str = "clustered",
-                   permissive: bool = False, quotient: bool = True
-                   ) -> tuple[bool, LTS | None, str]:
+                   permissive: bool = False, quotient: bool = True,
+                   started: float | None = None) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
 
     With ``quotient`` the body machines are first replaced by their bisimulation quotients
     (:func:`symbolic_game.quotient_leaves`) and, in the ``clustered`` order, renumbered to
     fluent-aligned codes (:func:`recode.recode_leaves`); an unrealizable game to be explained
     is then solved again without either, so the counter-strategy trace names the machines'
-    own states."""
+    own states.
+
+    ``started`` (``perf_counter`` time; default: this call) is when synthesis began: the
+    verdict is reported through ``say`` as soon as the fixpoint decides it
+    (:func:`_announce`), before the controller is extracted."""
     t = time.perf_counter()
+    started = t if started is None else started
+    said = False  # the verdict was said by the quotiented solve below
     if quotient and spec.mode == "gr1":  # the director (§3.9) is ranked explicitly as is
         qspec = quotient_leaves(spec)
         if qspec is not spec:
@@ -137,35 +143,19 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
         if qspec is not spec:
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
-                                           quotient=False)
+                                           quotient=False, started=started)
             states = stats.get("game_states")
             if ok or not explain:
                 return ok, ctrl, why
             if not isinstance(states, int) or states > EXPLAIN_MAX_STATES:
                 return ok, ctrl, why + _TOO_LARGE  # no trace past the bound anyway
-    g = SymbolicGame(spec, order=order)
-    stats["bdd_backend"] = type(g.bdd).__module__
-    stats["order"] = order
-    stats["t_encode"] = time.perf_counter() - t
-    t = time.perf_counter()
+            said = True
     nonblocking = spec.mode == "nonblocking"
-    reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
-    stats["t_reach"] = time.perf_counter() - t
+    g, reach = _game_and_reach(spec, order, stats, say, t)
     care = g.live if reach is None else reach
-    if reach is not None:
-        g.restrict(reach)
-    if reach is not None:
-        stats["game_states"] = g.count(reach & g.live) + (
-            1 if (reach & g.error) != g.bdd.false else 0)
-    else:
-        stats["game_states"] = "unknown (reachable set not built)"
-    stats["trans_bdd_nodes"] = g.relation_nodes()
-    stats["bdd_vars"] = len(g.bdd.vars)
-    say(f"symbolic game: {stats['game_states']} reachable states, "
-        f"|T| = {stats['trans_bdd_nodes']} nodes in {len(g.groups)} groups")
     t = time.perf_counter()
     if nonblocking:
-        return _solve_nonblocking(g, care, stats, explain, name, t)
+        return _solve_nonblocking(g, care, stats, explain, name, t, say, started)
     goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
     fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live,
                      must_contain=g.init, progress=say, cpre_lost=g.cpre_lost)
@@ -174,6 +164,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["fixpoint_iterations"] = fp.iterations
     stats["winning_bdd_nodes"] = len(W)
     _peak(g, stats)
+    if not said:
+        _announce((g.init & W) != g.bdd.false, started, stats, say)
     if (g.init & W) == g.bdd.false:
         if explain and not fp.complete:
             # stopped early (must_contain): W is a superset of the winning region; the
@@ -188,6 +180,42 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["t_extract"] = time.perf_counter() - t
     _peak(g, stats)
     return True, ctrl, ""
+
+
+def _game_and_reach(spec: GameSpec, order: str, stats: dict[str, Any],
+                    say: Callable[[str], None], t: float) -> tuple[SymbolicGame, Any]:
+    """Encode the game, build its reachable set (None: abandoned at
+    :data:`REACH_MAX_NODES`) and restrict the framed relations to it."""
+    g = SymbolicGame(spec, order=order)
+    stats["bdd_backend"] = type(g.bdd).__module__
+    stats["order"] = order
+    stats["t_encode"] = time.perf_counter() - t
+    t = time.perf_counter()
+    nonblocking = spec.mode == "nonblocking"
+    reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
+    stats["t_reach"] = time.perf_counter() - t
+    if reach is not None:
+        g.restrict(reach)
+        stats["game_states"] = g.count(reach & g.live) + (
+            1 if (reach & g.error) != g.bdd.false else 0)
+    else:
+        stats["game_states"] = "unknown (reachable set not built)"
+    stats["trans_bdd_nodes"] = g.relation_nodes()
+    stats["bdd_vars"] = len(g.bdd.vars)
+    say(f"symbolic game: {stats['game_states']} reachable states, "
+        f"|T| = {stats['trans_bdd_nodes']} nodes in {len(g.groups)} groups")
+    return g, reach
+
+
+def _announce(realizable: bool, started: float, stats: dict[str, Any],
+              say: Callable[[str], None]) -> None:
+    """``verdict: realizable|unrealizable at N s`` (seconds since synthesis began), said as
+    soon as the fixpoint decides: on the big SYNTECH15 games the explicit controller
+    enumeration can take far longer than the verdict (issue 12's target is the verdict
+    within 60 s), so a caller with a deadline still learns it.  Also ``stats["verdict_at"]``."""
+    secs = time.perf_counter() - started
+    stats["verdict_at"] = secs
+    say(f"verdict: {'realizable' if realizable else 'unrealizable'} at {secs:.1f} s")
 
 
 def _nbody(spec: GameSpec) -> int:
@@ -221,11 +249,13 @@ def _check_controller_bound(bound: int, name: str) -> None:
 
 
 def _solve_nonblocking(g: SymbolicGame, reach: Any, stats: dict[str, Any], explain: bool,
-                       name: str, t: float) -> tuple[bool, LTS | None, str]:
+                       name: str, t: float, say: Callable[[str], None], started: float
+                       ) -> tuple[bool, LTS | None, str]:
     marked = g.guarantees[0] & reach
     W = nonblocking_symbolic(g, reach, marked)
     stats["t_solve"] = time.perf_counter() - t
     stats["winning_states"] = g.count(W)
+    _announce((g.init & W) != g.bdd.false, started, stats, say)
     if (g.init & W) == g.bdd.false:
         return False, None, _explain_symbolic(g, reach, W, explain)
     t = time.perf_counter()

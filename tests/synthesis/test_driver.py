@@ -186,3 +186,24 @@ def test_autoref_backend_agrees_with_default():
         counts.append(g.count(fp.winning & reach))
     assert counts[0] == counts[1] > 0  # not everything wins, not nothing
     assert counts[0] < g.count(reach)
+
+
+def test_verdict_is_said_before_the_controller_is_extracted():
+    """The symbolic solver says ``verdict: ... at N s`` as soon as the fixpoint decides (the
+    SYNTECH15 benchmark reads it), before the extraction's own progress lines."""
+    said: list[str] = []
+    quiet = fl("Quiet", {"r", "l"}, {"alarm"})
+    p = problem(ROOMS, controllable={"l", "r"}, fluents=[IN0, IN1, quiet],
+                guarantees=(F("In0"), F("In1")), assumptions=(F("Quiet"),))
+    r = synthesize(p, progress=said.append)
+    verdicts = [m for m in said if m.startswith("verdict:")]
+    assert len(verdicts) == 1 and verdicts[0].startswith("verdict: realizable at ")
+    assert said.index(verdicts[0]) == len(said) - 1 or not any(
+        m.startswith("symbolic game") for m in said[said.index(verdicts[0]):])
+    assert r.stats.verdict_at is not None and r.stats.verdict_at >= 0
+    said.clear()
+    bad = synthesize(problem(ROOMS, controllable={"l", "r"}, fluents=[IN0, IN1],
+                             guarantees=(F("In0"), F("In1"))), progress=said.append)
+    assert not bad.realizable
+    assert [m.split(" at ")[0] for m in said if m.startswith("verdict:")] == [
+        "verdict: unrealizable"]
