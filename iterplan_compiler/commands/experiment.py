@@ -146,7 +146,7 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     # sweep killed after hours resumes where it stopped: runs already in the file are kept.
     partial = out / f"{name}.partial.csv"
     fields = harness.CASE_FIELDS + harness.RESULT_FIELDS + ["floor", "physics_pct",
-                                                           "first_loop", "warmup"]
+                                                           "first_loop", "warmup", "launch"]
     final = out / f"{name}.csv"
     done_rows = [] if args.fresh else _resumable_rows(partial, fields) + \
         _finished_rows(final, fields)

@@ -47,8 +47,10 @@ def add_arrival_arguments(parser: argparse.ArgumentParser, *, paper_default: boo
                         default=HeadingChoice.SHORTEST.value if paper_default else None,
                         help="arrival heading per leg: the shortest path (the paper's), the "
                              "one that also shortens the next leg (the tour's planned heading "
-                             "with --sorter tour), or repeat: the one that also shortens the "
-                             "legs that followed this location the last time (patrols)")
+                             "with --sorter tour), repeat: the one that also shortens the "
+                             "legs that followed this location the last time (patrols), or "
+                             "predict: repeat, with the targets a shadow run of the plan "
+                             "predicts before anything repeats")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -184,6 +184,9 @@ class Point:
     #: (runs with ``warmup`` > 0; else NaN: the first loop is in ``duration``)
     first_loop_pct: float = math.nan
     first_loop_err3: float = math.nan
+    #: fig3b: seconds from the mission's start (after take-off) to the first visit of p.0
+    launch_s: float = math.nan
+    launch_err3: float = math.nan
 
 
 def aggregate(rows: Iterable[dict]) -> list[Point]:
@@ -201,11 +204,13 @@ def aggregate(rows: Iterable[dict]) -> list[Point]:
         ph = summarize(_num(r.get("physics_pct")) for r in ok)
         first = summarize(100.0 * (_num(r.get("first_loop")) - float(r["ideal"]))
                           / float(r["ideal"]) for r in ok if _num(r.get("warmup")) > 0)
+        launch = summarize(_num(r.get("launch")) for r in ok)
         points.append(Point(key[0], key[1], key[2], key[3], n=d.n, duration=d.mean, duration_err3=d.err3, ideal=ideal,
                             overhead_pct=o.mean, overhead_err3=o.err3,
                             failed=len(rs) - len(ok), physics_pct=ph.mean,
                             physics_err3=ph.err3, first_loop_pct=first.mean,
-                            first_loop_err3=first.err3))
+                            first_loop_err3=first.err3, launch_s=launch.mean,
+                            launch_err3=launch.err3))
     return points
 
 

@@ -55,15 +55,18 @@ def cover_time(log: Sequence[LogEvent], region: Iterable[int]) -> tuple[float, L
 def measure(case: Case, log: Sequence[LogEvent], grid, speed: float, warmup: int = 0) -> dict:
     """The case's duration and ideal from its event log.  Patrol: the mean of ``case.loops``
     loops after ``warmup`` loops (the first loop carries the approach from the launch: the
-    arrival pose at p.0 is the launch leg's); ``first_loop`` is the first loop's time."""
+    arrival pose at p.0 is the launch leg's); ``first_loop`` is the first loop's time,
+    ``launch`` the time from the mission's start (after take-off) to the first visit of p.0."""
     if case.experiment == "fig3b":
         loops = loop_times(log)
         if len(loops) < warmup + case.loops:
             raise MeasurementError(f"only {len(loops)} complete patrol loop(s) in the log")
         points = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
         dur = sum(loops[warmup: warmup + case.loops]) / case.loops
+        launch = next(e.t for e in log if e.label == "visited.p.0")
         return {"duration": dur, "ideal": ideal_patrol_loop(points, speed),
-                "events": len(log), "first_loop": loops[0], "warmup": warmup}
+                "events": len(log), "first_loop": loops[0], "warmup": warmup,
+                "launch": launch}
     region = [int(c) for c in grid.sensors["cover"]]
     dur, start = cover_time(log, region)
     centres = [grid.centre(c) for c in region]

@@ -107,7 +107,7 @@ class Executor:
         self.track: list[tuple[float, float, float, float]] = []
         self.counts = {"steps": 0, "controllable": 0, "uncontrollable": 0, "go": 0,
                        "arrived": 0, "passes": 0, "skipped": 0}
-        self._skip_sensors = static_sensors(self.bindings)
+        self.skip_sensors = static_sensors(self.bindings)
         self._skip_cache: dict[int, dict[int, Cycle | None]] = {}
         self.compute_s = 0.0
         self._mark = self.cfg.compute_clock()   # start of the current think period
@@ -245,7 +245,7 @@ class Executor:
         (``runtime/skip.py``); True if any was skipped."""
         total = fast_skip(self.iterator, self.controller.state,
                           self._skip_cache.setdefault(self.controller.state, {}),
-                          self._skip_sensors, self.table, self.bindings,
+                          self.skip_sensors, self.table, self.bindings,
                           self.cfg.on_event_labels or frozenset(), self.counts)
         if total:
             self.log_entry("x", f"fast skip: {total} locations")
@@ -456,7 +456,7 @@ class Executor:
         """Whether the fast skip may run (configured, no chooser, static next-sensors, and an
         ``on_event`` hook, if any, that says which labels it needs)."""
         cfg = self.cfg
-        return cfg.fast_skip and cfg.choose is None and bool(self._skip_sensors.labels) \
+        return cfg.fast_skip and cfg.choose is None and bool(self.skip_sensors.labels) \
             and (cfg.on_event is None or cfg.on_event_labels is not None)
 
     def _pass_done(self) -> bool:

@@ -117,6 +117,20 @@ class Iterator:
         """Re-order R for ``pose`` (``n`` itself is unchanged, as in the paper)."""
         self._order(self._queue[self._head:], pose)
 
+    def fork(self) -> Iterator:
+        """An independent copy of this iterator's position and state (D, n, R, the offered
+        order and the Sorter's state): operations on the copy never change this one (the
+        read-only location arrays are shared).  What a shadow run of the plan iterates
+        (``runtime/shadow.py``)."""
+        twin = object.__new__(Iterator)
+        twin.__dict__.update(self.__dict__)
+        twin.sorter = self.sorter.fork()
+        twin.done = self.done.copy()
+        twin._queue = self._queue.copy()
+        twin._keys = self._keys.copy()
+        twin._lb = None if self._lb is None else self._lb.copy()
+        return twin
+
     # -- introspection --------------------------------------------------------------------------
     def remaining_count(self) -> int:
         return len(self._queue) - self._head

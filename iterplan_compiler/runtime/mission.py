@@ -10,7 +10,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from iterplan_compiler.runtime.iterator import Iterator
-from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice, MotionPlanner
+from iterplan_compiler.runtime.planner import (
+    ArrivalHeadings,
+    HeadingChoice,
+    MotionPlanner,
+    shortest_csc,
+)
+from iterplan_compiler.runtime.shadow import Prediction, Shadow
 from iterplan_compiler.runtime.sorter import Pose, SorterKind
 from iterplan_compiler.runtime.vehicle import SafeAction, Start
 
@@ -84,6 +90,16 @@ class TargetMemory:
             self._followed[self._previous] = cell
         self._previous = cell
 
+    def expect(self, prediction: Prediction) -> None:
+        """What a shadow run predicts (``HeadingChoice.PREDICT``): its targets follow its start
+        in order (and the start follows them if the prediction closes a cycle).  Real targets
+        recorded later overwrite it."""
+        chain = [prediction.start, *prediction.targets]
+        if prediction.closes:
+            chain.append(prediction.start)
+        for a, b in zip(chain[:-1], chain[1:], strict=True):
+            self._followed[a] = b
+
     def expected_after(self, cell: int, limit: int = 8) -> tuple[list[int], bool]:
         """The targets that followed ``cell`` the last time, then their successors, up to
         ``limit``; and whether that chain leads back to ``cell`` (a patrol cycle)."""
@@ -113,6 +129,8 @@ class MissionContext:
         self.last_arrival: int | None = None
         self.done: set[str] = set()
         self.targets = TargetMemory()
+        self.shadow: Shadow | None = None    # built on the first prediction (PREDICT)
+        self.predictions: list[Prediction] = []
 
     def predicted_pose(self) -> Pose:
         """Where the vehicle will be when the current leg ends: the arrival pose of the active
@@ -132,13 +150,42 @@ class MissionContext:
             if planned is None and self.iterator.remaining_count():
                 then = self.grid.centre(int(self.iterator.peek_order(1)[0]))
         self.targets.record(int(cell))
+        if self.planner.choice is HeadingChoice.PREDICT:
+            self._predict(int(cell))
         chain, closes = (self.targets.expected_after(int(cell))
-                         if self.planner.choice is HeadingChoice.REPEAT else ([], False))
+                         if self.planner.choice in (HeadingChoice.REPEAT, HeadingChoice.PREDICT)
+                         else ([], False))
         arrival = self.planner.go(*self.grid.centre(cell), then=then, heading=planned,
                                   chain=[self.grid.centre(c) for c in chain], closes=closes)
         self._ex.counts["go"] += 1
         # Sorting happens while the aircraft flies the leg, from the predicted arrival pose.
         self.iterator.resort(arrival)
+
+    def _predict(self, cell: int) -> None:
+        """Unless the targets after ``cell`` are known to come round again, run the plan's
+        shadow ahead (``runtime/shadow.py``) and remember what it predicts; its think time is
+        flight time, charged before the leg is planned."""
+        if self.targets.expected_after(cell)[1] or self._ex.cfg.choose is not None:
+            return
+        ex = self._ex
+        if self.shadow is None:
+            self.shadow = Shadow(ex.table, ex.bindings, ex.skip_sensors, self.arrival_pose)
+        p = self.vehicle.pose()
+        prediction = self.shadow.predict(ex.controller.state, self.iterator, cell,
+                                         Pose(p.x, p.y, p.course))
+        self.predictions.append(prediction)
+        self.targets.expect(prediction)
+        ex.log_entry("x", f"predicted {len(prediction.targets)} target(s) after "
+                          f"{self.grid.cell_name(cell)} ({prediction.stop.value})")
+        ex.settle_compute()
+
+    def arrival_pose(self, pose: Pose, cell: int) -> Pose:
+        """The arrival pose at ``cell`` flying from ``pose`` by the shortest admissible path
+        (the shadow's model of a leg)."""
+        x, y = self.grid.centre(cell)
+        path = min((shortest_csc(pose, x, y, h, self.planner.radius)
+                    for h in self.planner.admissible), key=lambda d: d.length)
+        return Pose(x, y, path.end_heading)
 
     def current_cell(self) -> int | None:
         """The cell the vehicle is at: the last arrival's cell (the plan only senses the current

@@ -67,6 +67,8 @@ class HeadingChoice(enum.Enum):
     #                           the Iterator offers next): favours flying on straight
     REPEAT = "repeat"         # LOOKAHEAD to the location that followed this one the last
     #                           time the mission went there (patrols); SHORTEST before that
+    PREDICT = "predict"       # REPEAT, with the locations a shadow run of the plan predicts
+    #                           before the mission has repeated (runtime/shadow.py)
 
 
 def admissible_headings(arrival_heading: float, parallel: bool,
@@ -226,8 +228,8 @@ class MotionPlanner:
         ``then``: the location expected next (``HeadingChoice.LOOKAHEAD`` picks the arrival
         heading that minimises this leg plus the next one); ``heading``: an arrival heading
         planned by the Sorter (``tour``), taken as it is under ``LOOKAHEAD``; ``chain``: the
-        locations expected after this one (``REPEAT``: the heading minimising the legs through
-        them, and back here if ``closes``)."""
+        locations expected after this one (``REPEAT``, ``PREDICT``: the heading minimising the
+        legs through them, and back here if ``closes``)."""
         self.target = (float(x), float(y))
         self._target_misses = 0
         self._fixed = None
@@ -235,7 +237,7 @@ class MotionPlanner:
             self._fixed = (float(heading),)
         elif then is not None and self.choice is HeadingChoice.LOOKAHEAD:
             self._fixed = (self._best_heading(x, y, (then,), closes=False),)
-        elif chain and self.choice is HeadingChoice.REPEAT:
+        elif chain and self.choice in (HeadingChoice.REPEAT, HeadingChoice.PREDICT):
             self._fixed = (self._best_heading(x, y, chain, closes=closes),)
         self._plan()
         return Pose(x, y, self.heading)

@@ -26,6 +26,7 @@ arrival heading, 220 for parallel; ``benchmarks/sorter_bench.py`` prints the thr
 
 from __future__ import annotations
 
+import copy
 import enum
 import math
 from dataclasses import dataclass
@@ -338,6 +339,11 @@ class Sorter:
         motion planner then arrives so), or None: the planner chooses."""
         return None
 
+    def fork(self) -> Sorter:
+        """An independent copy (``Iterator.fork``): using it never changes this sorter.  The
+        default shares the fields, which sorters replace rather than change in place."""
+        return copy.copy(self)
+
     def best(self, xs: np.ndarray, ys: np.ndarray, ids: np.ndarray, pose: Pose) -> int:
         """Index (into the given arrays) of the location a full stable sort by :meth:`keys`
         would put first: the smallest key, ties to the lowest index.  One kernel pass and an
@@ -397,6 +403,13 @@ class RandomSorter(Sorter):
 
     def keys(self, xs, ys, ids, pose):
         return self.rng.random(len(ids), dtype=np.float32)
+
+    def fork(self) -> RandomSorter:
+        """A copy with its own generator in the same state (the copy's draws do not advance
+        this sorter's)."""
+        twin = copy.copy(self)
+        twin.rng = copy.deepcopy(self.rng)
+        return twin
 
 
 class SorterKind(enum.Enum):

@@ -64,7 +64,7 @@ def test_dynamic_sensors_are_never_skipped(compiled):
     table = load_controller(compiled.module("find_nemo"))
     grid, _ = compiled.map("find_nemo")
     (a, _), (b, eb) = fly(table, grid, False), fly(table, grid, True)
-    assert list(eb._skip_sensors.labels) == ["is.next.roi"]
+    assert list(eb.skip_sensors.labels) == ["is.next.roi"]
     same_mission(a, b)
 
 
