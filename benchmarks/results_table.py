@@ -34,20 +34,27 @@ def table(path: Path) -> str:
     by = defaultdict(dict)
     for r in rows:
         by[int(r[xkey])][r["sorter"]] = r
-    # sweeps measured after a warm-up loop also report the first loop (fig3b --warmup)
-    first = any(r.get("first_loop_pct") not in (None, "", "nan") for r in rows)
+    # sweeps measured after a warm-up loop also report the first loop (fig3b --warmup), and
+    # newer fig3b sweeps the launch leg (s from the start to the first visit of p.0)
+    extras = [(key, title) for key, title in (("first_loop", "first loop % (distance)"),
+                                              ("launch", "launch s (distance)"))
+              if any(r.get(f"{key}_pct" if key == "first_loop" else f"{key}_s")
+                     not in (None, "", "nan") for r in rows)]
     head = f"| {xkey} | n | " + " | ".join(f"{s} overhead %" for s in sorters) + \
-        (" | first loop % (distance)" if first else "") + \
+        "".join(f" | {title}" for _, title in extras) + \
         " | physics floor % (distance) | ideal s |"
     out = [f"**{exp}** ({path.parent.name}; paper: {PAPER.get(exp, '')})", "", head,
-           "|" + "---|" * (len(sorters) + 4 + first)]
+           "|" + "---|" * (len(sorters) + 4 + len(extras))]
     for x in sorted(by):
         cells = [fmt(by[x][s]["overhead_pct"], by[x][s]["overhead_err3"]) if s in by[x] else ""
                  for s in sorters]
         any_row = next(iter(by[x].values()))
         ref = by[x].get("distance", any_row)
-        extra = (f" | {fmt(ref.get('first_loop_pct', ''), ref.get('first_loop_err3', ''))}"
-                 if first else "")
+        extra = "".join(
+            f" | {fmt(ref.get('first_loop_pct', ''), ref.get('first_loop_err3', ''))}"
+            if key == "first_loop" else
+            f" | {fmt(ref.get('launch_s', ''), ref.get('launch_err3', ''))}"
+            for key, _ in extras)
         out.append(f"| {x:,} | {any_row['n']} | " + " | ".join(cells) + extra +
                    f" | {fmt(ref.get('physics_pct', ''), ref.get('physics_err3', ''))} | "
                    f"{float(any_row['ideal']):.1f} |")
