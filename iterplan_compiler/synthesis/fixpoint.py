@@ -76,55 +76,28 @@ Optimisations (each sound by monotonicity of the operators; switches in
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from enum import Enum
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 from iterplan_compiler import limits
+from iterplan_compiler.synthesis.fixpoint_ops import (
+    CallableFrontierPre,
+    CallablePre,
+    FrontierPredecessor,
+    GoalKind,
+    Memo,
+    Op,
+    Predecessor,
+    StateOp,
+    TransitionOp,
+    TransitionPredecessor,
+)
+
+__all__ = ["SLUGS_OPTIONS", "EngineOptions", "FrontierPredecessor", "GoalKind",
+           "Gr1Fixpoint", "Predecessor", "TransitionPredecessor", "gr1_winning", "solve_gr1"]
 
 Node = Any  # a dd BDD node (dd.cudd.Function or dd.autoref.Function)
-
-
-class GoalKind(Enum):
-    """Whether assumptions/guarantees are state predicates or may mention next-state
-    variables (slugs' primed liveness lines)."""
-
-    STATE = "state"
-    TRANSITION = "transition"
-
-
-@runtime_checkable
-class Predecessor(Protocol):
-    """A game, seen by the engine: the controllable predecessor of a state set."""
-
-    def cpre(self, states: Node) -> Node:
-        """States from which the controller can force the next state into ``states``."""
-        ...
-
-
-@runtime_checkable
-class TransitionPredecessor(Predecessor, Protocol):
-    """A game that also supports transition-level targets (needed by ``GoalKind.TRANSITION``)."""
-
-    def prime(self, states: Node) -> Node:
-        """The next-state copy of a state set."""
-        ...
-
-    def cpre_trans(self, target: Node) -> Node:
-        """States from which the controller can force the next *transition* into ``target``."""
-        ...
-
-
-@runtime_checkable
-class FrontierPredecessor(Predecessor, Protocol):
-    """A game that can update CPre after its argument shrank (module doc: frontier νX)."""
-
-    def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
-        """The states of ``within`` (a subset of ``CPre(states ∪ removed)``) that are not in
-        ``CPre(states)``."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -162,89 +135,6 @@ class Gr1Fixpoint:
     x_sets: list[list[list[Node]]] = field(default_factory=list)
     complete: bool = True
     iterations: dict[str, int] = field(default_factory=dict)
-
-
-class _Memo:
-    """``CPre`` with a cache keyed by BDD node (LRU-bounded unless ``size`` is None)."""
-
-    def __init__(self, cpre: Callable[[Node], Node], size: int | None) -> None:
-        self.raw = cpre
-        self.size = size
-        self.cache: OrderedDict[Node, Node] = OrderedDict()
-
-    def __call__(self, u: Node) -> Node:
-        if self.size == 0:
-            return self.raw(u)
-        r = self.cache.get(u)
-        if r is not None:
-            self.cache.move_to_end(u)
-            return r
-        r = self.cache[u] = self.raw(u)
-        if self.size is not None and len(self.cache) > self.size:
-            self.cache.popitem(last=False)
-        return r
-
-
-class _StateOp:
-    """The STATE-kind operator: ``νX. goal ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))``, inside ``Z``."""
-
-    def __init__(self, bdd: Any, cpre: Callable[[Node], Node],
-                 lost: Callable[[Node, Node, Node], Node] | None = None, ratio: int = 0
-                 ) -> None:
-        self.bdd, self.cpre, self.lost, self.ratio = bdd, cpre, lost, ratio
-
-    def goal(self, g: Node, Z: Node) -> Node:
-        return g & self.cpre(Z)
-
-    def base(self, goal: Node, Y: Node, Z: Node) -> Node:
-        # not restricted to Z: every νX step is intersected with its start ⊆ Z anyway
-        return goal | self.cpre(Y)
-
-    def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
-        if not_a == self.bdd.false:
-            return base
-        return base | (not_a & self.cpre(X))
-
-    def floor(self, base: Node, Z: Node) -> Node:
-        """A state set inside ``Z`` that every ``νX`` value contains."""
-        return base & Z
-
-    def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
-        """``step(X) ∧ start`` for ``X = step(prev) ∧ start ⊆ prev`` (frontier νX)."""
-        if self.lost is not None:
-            removed = prev & ~X
-            if len(removed) * self.ratio < len(X):
-                return X & ~self.lost(X, removed, X & ~base)
-        return self.x_step(base, not_a, X) & start
-
-
-class _TransitionOp:
-    """The TRANSITION-kind operator: ``νX. CPreT((G ∧ Z') ∨ Y' ∨ (¬A_i ∧ X'))``."""
-
-    def __init__(self, bdd: Any, pre: TransitionPredecessor) -> None:
-        self.bdd, self.pre = bdd, pre
-
-    def goal(self, g: Node, Z: Node) -> Node:
-        return g & self.pre.prime(Z)
-
-    def base(self, goal: Node, Y: Node, Z: Node) -> Node:
-        return goal | self.pre.prime(Y)
-
-    def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
-        if not_a == self.bdd.false:
-            return self.pre.cpre_trans(base)
-        return self.pre.cpre_trans(base | (not_a & self.pre.prime(X)))
-
-    def floor(self, base: Node, Z: Node) -> Node:
-        """A state set inside ``Z`` that every ``νX`` value contains (``base`` is
-        transition-level here, so: none)."""
-        return self.bdd.false
-
-    def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
-        return self.x_step(base, not_a, X) & start
-
-
-_Op = _StateOp | _TransitionOp
 
 
 @dataclass
@@ -285,17 +175,17 @@ def solve_gr1(
                        stats)
 
 
-def _operator(bdd: Any, pre: Predecessor, goals: GoalKind, options: EngineOptions) -> _Op:
+def _operator(bdd: Any, pre: Predecessor, goals: GoalKind, options: EngineOptions) -> Op:
     if goals is GoalKind.TRANSITION:
         if not isinstance(pre, TransitionPredecessor):
             raise TypeError("transition goals need a TransitionPredecessor (prime, cpre_trans)")
-        return _TransitionOp(bdd, pre)
+        return TransitionOp(bdd, pre)
     lost = pre.cpre_lost if (isinstance(pre, FrontierPredecessor)
                              and options.frontier_ratio > 0) else None
-    return _StateOp(bdd, _Memo(pre.cpre, options.memo), lost, options.frontier_ratio)
+    return StateOp(bdd, Memo(pre.cpre, options.memo), lost, options.frontier_ratio)
 
 
-def _feedback_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
+def _feedback_passes(bdd: Any, op: Op, not_a: list[Node], states: list[_Goal], Z: Node,
                      keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
                      stats: dict[str, int], progress: Callable[[str], None] | None
                      ) -> tuple[Node, bool]:
@@ -326,7 +216,7 @@ def _feedback_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], 
     return Z, True
 
 
-def _classic_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z: Node,
+def _classic_passes(bdd: Any, op: Op, not_a: list[Node], states: list[_Goal], Z: Node,
                     keep: bool, lost: Callable[[Node], bool] | None, options: EngineOptions,
                     stats: dict[str, int], progress: Callable[[str], None] | None
                     ) -> tuple[Node, bool]:
@@ -346,7 +236,7 @@ def _classic_passes(bdd: Any, op: _Op, not_a: list[Node], states: list[_Goal], Z
             return Z, False
 
 
-def _visit(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, keep: bool,
+def _visit(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, keep: bool,
            options: EngineOptions, stats: dict[str, int]) -> Node:
     """One ``μY`` for goal ``s`` against ``Z``; updates its recycled values / iterates."""
     stats["goals"] += 1
@@ -362,7 +252,7 @@ def _visit(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, keep: bool,
     return Y
 
 
-def _start(op: _Op, s: _Goal, r: int, i: int, Z: Node, base: Node, recycle: bool) -> Node:
+def _start(op: Op, s: _Goal, r: int, i: int, Z: Node, base: Node, recycle: bool) -> Node:
     """Where ``νX`` for ``(r, i)`` starts: ``Z``, or its recycled value from the last visit
     (∧ ``Z``, ∨ the part of ``base`` in ``Z``, which the fixpoint contains anyway)."""
     if recycle and r < len(s.recycled) and i < len(s.recycled[r]):
@@ -370,7 +260,7 @@ def _start(op: _Op, s: _Goal, r: int, i: int, Z: Node, base: Node, recycle: bool
     return Z
 
 
-def _mu_y(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
+def _mu_y(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
           stats: dict[str, int]) -> tuple[list[Node], list[list[Node]], Node]:
     """Round-wise (Jacobi) ``μY``: ``(layers, x_layers, Y)``."""
     goal = op.goal(s.g, Z)
@@ -397,7 +287,7 @@ def _mu_y(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool
             return layers, x_layers, Y
 
 
-def _mu_y_chained(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
+def _mu_y_chained(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
                   stats: dict[str, int]) -> tuple[list[list[Node]], Node]:
     """Gauss–Seidel ``μY`` (module doc): ``Y`` grows after every ``νX``; ``(x_rounds, Y)``."""
     goal = op.goal(s.g, Z)
@@ -423,7 +313,7 @@ def _mu_y_chained(bdd: Any, op: _Op, not_a: list[Node], s: _Goal, Z: Node, recyc
                 return x_rounds, Y
 
 
-def _nu_x(bdd: Any, op: _Op, base: Node, not_a: Node, start: Node,
+def _nu_x(bdd: Any, op: Op, base: Node, not_a: Node, start: Node,
           stats: dict[str, int]) -> Node:
     """``νX. step(X)`` from ``start`` (an over-approximation), descending inside ``start``.
 
@@ -443,28 +333,6 @@ def _nu_x(bdd: Any, op: _Op, base: Node, not_a: Node, start: Node,
             break
         prev, X = X, x_new
     return X
-
-
-class _CallablePre:
-    """A plain ``cpre`` function as a :class:`Predecessor`."""
-
-    def __init__(self, cpre: Callable[[Node], Node]) -> None:
-        self._cpre = cpre
-
-    def cpre(self, states: Node) -> Node:
-        return self._cpre(states)
-
-
-class _CallableFrontierPre(_CallablePre):
-    """``cpre`` and ``cpre_lost`` functions as a :class:`FrontierPredecessor`."""
-
-    def __init__(self, cpre: Callable[[Node], Node],
-                 lost: Callable[[Node, Node, Node], Node]) -> None:
-        super().__init__(cpre)
-        self._lost = lost
-
-    def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
-        return self._lost(states, removed, within)
 
 
 def gr1_winning(
@@ -492,7 +360,7 @@ def gr1_winning(
         def lost(Z: Node) -> bool:
             return bool((Z & mc) == bdd.false)
 
-    pre = _CallablePre(cpre) if cpre_lost is None else _CallableFrontierPre(cpre, cpre_lost)
+    pre = CallablePre(cpre) if cpre_lost is None else CallableFrontierPre(cpre, cpre_lost)
     return solve_gr1(bdd, pre, assumptions, guarantees, care=care,
                      keep_iterates=keep_iterates, lost=lost, progress=progress,
                      options=EngineOptions(memo=None if memo else 0,
