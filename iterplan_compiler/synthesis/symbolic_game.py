@@ -16,7 +16,7 @@ component interleaves, i.e. is an action owned by that component alone).  Action
 owner set and the same controllability are merged into one *group* ``R_g = ∨_a ∧_k R_k^a``;
 the frame conjuncts are never built: an image over a group renames and quantifies only the
 owners' variables (early quantification — everything outside the owners passes through the
-relational product untouched).  Measured on SYNTECH15 GyroLTL_637 (29 leaves, 17+5 actions):
+relational product untouched; the groups are built and merged in :mod:`partition`).  Measured on SYNTECH15 GyroLTL_637 (29 leaves, 17+5 actions):
 the monolithic action-quantified relation had 550 k nodes, the groups together a few
 thousand, so one CPre costs a few dozen small relational products instead of two huge ones.
 
@@ -36,10 +36,10 @@ and ``"blocked"`` (all current bits, then all next bits; the textbook bad order)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
-from iterplan_compiler.ir.lts import ERROR, LTS, TAU
+from iterplan_compiler.ir.lts import ERROR, LTS
 from iterplan_compiler.ir.minimise import strong_minimise
 from iterplan_compiler.symbolic.bdd import (
     BitVec,
@@ -52,10 +52,11 @@ from iterplan_compiler.symbolic.bdd import (
     value_cubes,
 )
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
+from iterplan_compiler.synthesis.partition import Group, Vars, cluster, owner_groups
 from iterplan_compiler.synthesis.recode import ERROR_BIT
 
 ORDERS = ("action_first", "clustered", "action_last", "blocked")
-#: see :meth:`SymbolicGame._cluster`
+#: see :func:`partition.cluster`
 CLUSTER_MAX_NODES = 250_000
 #: see :meth:`SymbolicGame.restrict`
 KEEP_SMALLER_RELATION = True
@@ -103,20 +104,6 @@ def quotient_leaves(spec: GameSpec) -> GameSpec:
     return replace(spec, components=tuple(comps)) if changed else spec
 
 
-@dataclass
-class Group:
-    """Actions sharing owners and controllability: ``rel`` over the owners' cur/next bits."""
-
-    owners: tuple[int, ...]
-    controllable: bool
-    actions: tuple[str, ...]
-    rel: Node
-    nxt_vars: frozenset[str]
-    cur_vars: frozenset[str]
-    prime: dict[str, Node]     # owner cur var -> next var node (for ``let``)
-    unprime: dict[str, Node]   # owner next var -> cur var node
-
-
 class SymbolicGame:
     """Partitioned BDD encoding of a :class:`GameSpec` (see the module docstring)."""
 
@@ -134,6 +121,7 @@ class SymbolicGame:
                       for c, n in zip(cv.names, nv.names, strict=True)}
         self._prime_f = {c: self.bdd.var(n) for c, n in self.prime.items()}
         self._unprime_f = {n: self.bdd.var(c) for c, n in self.prime.items()}
+        self.vars = Vars(self.cur, self.nxt, self.prime, self._prime_f, self._unprime_f)
         self.reach: Any = None  # set by reachable()
         self._block_cubes: list[dict[tuple[int, ...], Node]] = [
             {} for _ in range(0, len(spec.components), CUBE_BLOCK)]
@@ -266,90 +254,11 @@ class SymbolicGame:
         self.failures = disjoin(b, sets(spec.failures))
 
     def _groups(self, rels: list[dict[str, Node]]) -> list[Group]:
-        """One :class:`Group` per (owner set, controllability); ``tau`` of component ``k`` is
-        an uncontrollable action owned by ``k`` alone."""
-        b = self.bdd
-        comps = self.spec.components
-        ctrl = self.spec.controllable
-        owner_lists: dict[str, list[int]] = {}
-        for k, c in enumerate(comps):
-            for a in sorted(c.alphabet - {TAU}):
-                owner_lists.setdefault(a, []).append(k)
-        parts: dict[tuple[tuple[int, ...], bool], list[tuple[str, Node]]] = {}
-        for a, ks_list in sorted(owner_lists.items()):
-            r = b.true
-            for k in ks_list:
-                r &= rels[k].get(a, b.false)
-                if r == b.false:
-                    break
-            parts.setdefault((tuple(ks_list), a in ctrl), []).append((a, r))
-        for k, comp_rel in enumerate(rels):
-            if TAU in comp_rel:
-                parts.setdefault(((k,), False), []).append((TAU, comp_rel[TAU]))
-        out: list[Group] = []
-        for (ks, is_ctrl), acts in parts.items():
-            rel = disjoin(b, [r for _, r in acts])
-            if rel == b.false:
-                continue
-            cv = [v for k in ks for v in self.cur[k].names]
-            nv = [v for k in ks for v in self.nxt[k].names]
-            out.append(Group(ks, is_ctrl, tuple(a for a, _ in acts), rel, frozenset(nv),
-                             frozenset(cv), {c: self._prime_f[c] for c in cv},
-                             {n: self._unprime_f[n] for n in nv}))
-        return self._cluster(out)
-
-    def _cluster(self, groups: list[Group]) -> list[Group]:
-        """Merge the groups of each controllability into one *framed* relation over all
-        variables when it stays below :data:`CLUSTER_MAX_NODES` nodes.
-
-        Trade-off, measured on SYNTECH15 GyroLTL_486 (7 groups of 18/13/... owners): renaming
-        ``X`` once per group cost 4.7 s of fixpoint against 0.7 s with one framed relation per
-        controllability (one shared rename per CPre); on GyroLTL_637 the framed controllable
-        relation has 550 k nodes, so there the groups stay partitioned.  The bound was 100 k
-        until Fire Patrol N = 14, whose framed controllable relation has ~100 k nodes: kept
-        partitioned (4 groups) its fixpoint took 13.1 s CPU, framed (2 groups) 3.2 s (N = 13,
-        52 k nodes framed: 1.1 s).  At 250 k no SYNTECH15 file changes grouping (their
-        framed relations are under 70 k nodes or over 250 k)."""
-        b = self.bdd
-        out: list[Group] = []
-        all_n = frozenset(self.nxt_vars)
-        all_c = frozenset(self.cur_vars)
-        for is_ctrl in (True, False):
-            part = [g for g in groups if g.controllable == is_ctrl]
-            if len(part) <= 1:
-                out.extend(part)
-                continue
-            rel = b.false
-            for g in part:
-                rel |= g.rel & self.framed_to(g.cur_vars)
-                if len(rel) > CLUSTER_MAX_NODES:
-                    break
-            else:
-                acts = tuple(a for g in part for a in g.actions)
-                owners = tuple(range(len(self.cur)))
-                out.append(Group(owners, is_ctrl, acts, rel, all_n, all_c,
-                                 self._prime_f, self._unprime_f))
-                continue
-            out.extend(part)
-        return out
-
-    def framed_to(self, moved: frozenset[str]) -> Node:
-        """The frame ``∧_{v ∉ moved} v' = v``: every current variable *outside* ``moved``
-        (a group's ``cur_vars``) keeps its value.
-
-        Framed per *variable*, not per machine: with shared fluent variables
-        (:meth:`_declare_by_keys`) a machine outside the group may read a variable that an
-        owner writes.  Sharers agree on the fluent's own moves (its actions are in both
-        alphabets), but an owner's ERROR move clears its feature bits (ERROR is the error
-        bit alone, :mod:`recode`); framing the non-owner's bits then demanded ``f' = f``
-        and dropped that move — on GyroLTL_637, and on the spec of
-        ``tests/synthesis/test_framing.py``, an uncontrollable move to ERROR vanished and
-        the symbolic game called a losing state winning."""
-        b = self.bdd
-        u = b.true
-        for v in self.cur_vars - moved:
-            u &= b.var(v).equiv(b.var(self.prime[v]))
-        return u
+        """The partitioned relation (:func:`partition.owner_groups`), merged per
+        controllability where that stays small (:func:`partition.cluster`)."""
+        groups = owner_groups(self.bdd, self.vars, self.spec.components,
+                              self.spec.controllable, rels)
+        return cluster(self.bdd, self.vars, groups, CLUSTER_MAX_NODES)
 
     # -- operators ----------------------------------------------------------------------
 
