@@ -13,6 +13,7 @@ from iterplan_compiler import pipeline
 from iterplan_compiler.diagnostics import Diagnostic, render
 from iterplan_compiler.synthesis.driver import (
     Solver,
+    StrategyKind,
     SynthesisResult,
     VariableOrder,
 )
@@ -83,7 +84,8 @@ def format_report(name: str, result: SynthesisResult) -> str:
                      + (f", |T| = {st.trans_bdd_nodes} BDD nodes over {st.bdd_vars} vars"
                         if st.trans_bdd_nodes is not None else ""))
     if result.realizable:
-        lines.append(f"  controller: {st.controller_states} states, "
+        what = "controller (director)" if st.strategy is StrategyKind.DIRECTOR else "controller"
+        lines.append(f"  {what}: {st.controller_states} states, "
                      f"{st.controller_transitions} transitions; controlled system "
                      f"{st.composition_states} states")
     if st.times:

@@ -28,10 +28,14 @@ from iterplan_compiler.synthesis.encode import (
     prepare,
 )
 from iterplan_compiler.synthesis.strategy import (
+    StrategyKind,
     extract_controller,
     extract_director,
     nonblocking_region,
 )
+
+__all__ = ["Solver", "StrategyKind", "SynthesisResult", "SynthesisStats", "VariableOrder",
+           "check_compatibility", "plant_product", "strategy_kind", "synthesize"]
 
 
 class _StrEnum(str, enum.Enum):
@@ -76,6 +80,7 @@ class SynthesisStats(Mapping[str, object]):
 
     solver: Solver
     mode: str | None = None
+    strategy: StrategyKind | None = None
     warnings: tuple[str, ...] = ()
     precondition: str | None = None
     game_states: int | None = None
@@ -213,6 +218,7 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
         return _Outcome(False, None, None,
                         f"unrealizable: heuristic synthesis refused the problem: {e}")
     stats["mode"] = spec.mode
+    kind = stats["strategy"] = strategy_kind(problem, spec)
     stats["warnings"] = list(spec.warnings)
     stats["t_prepare"] = time.perf_counter() - t0
     name = problem.name
@@ -220,13 +226,13 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
         # §3.6 `permissive`: both solvers end in strategy.extract_controller
         if solver is Solver.EXPLICIT:
             result = _solve_explicit(spec, stats, say, max_states, explain, name,
-                                     permissive=problem.permissive)
+                                     permissive=problem.permissive, kind=kind)
         else:
             from iterplan_compiler.synthesis.game import solve_symbolic
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
                                     order=order.value, permissive=problem.permissive,
-                                    started=t0)
+                                    started=t0, kind=kind)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
         return _Outcome(False, None, None, msg, (error("E0908", msg, problem.span),))
@@ -254,7 +260,8 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
 
 def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
                     max_states: int | None, explain: bool, name: str, *,
-                    permissive: bool = False) -> tuple[bool, LTS | None, str]:
+                    permissive: bool = False, kind: StrategyKind = StrategyKind.PERMISSIVE
+                    ) -> tuple[bool, LTS | None, str]:
     t = time.perf_counter()
     game = _explicit.build_game(spec, max_states=max_states)
     stats["game_states"] = game.num_states
@@ -281,9 +288,25 @@ def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], 
     if not ranks.winning(game.initial):
         return False, None, _explain(spec, game, win, explain)
     t = time.perf_counter()
-    ctrl = extract_controller(game, ranks, name, alphabet, permissive=permissive)
+    ctrl = extract_controller(game, ranks, name, alphabet, permissive=permissive, kind=kind)
     stats["t_extract"] = time.perf_counter() - t
     return True, ctrl, ""
+
+
+def strategy_kind(problem: SynthesisProblem, spec: GameSpec) -> StrategyKind:
+    """The strategy a realizable ``problem`` yields (docs/semantics.md, "Synthesis").
+
+    ``heuristic`` (MTSA's DCS, §3.9) returns a *director*: without ``nonblocking`` the GR(1)
+    director of :mod:`symbolic_strategy` (one controllable move per state, the least rank
+    towards the pursued guarantee), with it the non-blocking director of
+    :func:`strategy.extract_director`, as ``monolithicDirector`` with ``nonblocking``.
+    ``controller`` composites, ``monolithicDirector`` without ``nonblocking`` (unchanged:
+    MTSA answers it with the plant, §3.10) and any composite with the ``permissive`` flag
+    (whose point is the extra moves) get MTSA's controller of §3.6."""
+    if spec.mode == "nonblocking" or ("heuristic" in problem.keywords
+                                      and not problem.permissive):
+        return StrategyKind.DIRECTOR
+    return StrategyKind.PERMISSIVE
 
 
 def _fluent_only_actions(spec: GameSpec) -> frozenset[str]:

@@ -20,9 +20,9 @@ from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
 from iterplan_compiler.synthesis.recode import recode_leaves
-from iterplan_compiler.synthesis.strategy import extract_director
+from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
 from iterplan_compiler.synthesis.symbolic_game import ORDERS, SymbolicGame, quotient_leaves
-from iterplan_compiler.synthesis.symbolic_strategy import symbolic_controller
+from iterplan_compiler.synthesis.symbolic_strategy import extract_gr1_strategy
 
 __all__ = ["ORDERS", "SymbolicGame", "nonblocking_symbolic", "solve_symbolic", "subgame"]
 
@@ -116,7 +116,9 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
                    explain: bool, name: str, order: str = "clustered",
                    permissive: bool = False, quotient: bool = True,
-                   started: float | None = None) -> tuple[bool, LTS | None, str]:
+                   started: float | None = None,
+                   kind: StrategyKind = StrategyKind.PERMISSIVE
+                   ) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
 
     With ``quotient`` the body machines are first replaced by their bisimulation quotients
@@ -127,7 +129,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
 
     ``started`` (``perf_counter`` time; default: this call) is when synthesis began: the
     verdict is reported through ``say`` as soon as the fixpoint decides it
-    (:func:`_announce`), before the controller is extracted."""
+    (:func:`_announce`), before the controller is extracted.  ``kind``: MTSA's controller
+    or the GR(1) director (:mod:`symbolic_strategy`)."""
     t = time.perf_counter()
     started = t if started is None else started
     said = False  # the verdict was said by the quotiented solve below
@@ -143,7 +146,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
         if qspec is not spec:
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
-                                           quotient=False, started=started)
+                                           quotient=False, started=started,
+                                           kind=kind)
             states = stats.get("game_states")
             if ok or not explain:
                 return ok, ctrl, why
@@ -176,7 +180,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
         stats["winning_states"] = g.count(W)
         _check_controller_bound(stats["winning_states"] * len(goals), name)
     t = time.perf_counter()
-    ctrl = symbolic_controller(g, W, name, spec.alphabet, permissive=permissive, progress=say)
+    ctrl = extract_gr1_strategy(g, W, name, spec.alphabet, kind, permissive=permissive,
+                                progress=say)
     stats["t_extract"] = time.perf_counter() - t
     _peak(g, stats)
     return True, ctrl, ""

@@ -12,6 +12,7 @@ deleting every ``#w#_`` transition gives back the ordinary controller.
 
 from __future__ import annotations
 
+import enum
 from collections import deque
 
 from iterplan_compiler.ir.lts import LTS, make_lts
@@ -21,17 +22,37 @@ from iterplan_compiler.synthesis.explicit import ExplicitGame, Ranks
 #: ``#w#_c``)
 PERMISSIVE_PREFIX = "#w#_"
 
+
+class StrategyKind(enum.Enum):
+    """Which strategy a realizable GR(1) game yields (chosen by ``driver.strategy_kind``).
+
+    ``PERMISSIVE`` — MTSA's controller of §3.6: every uncontrollable move and *every* better
+    controllable one (``controller`` composites); ``DIRECTOR`` — the same rule, but of the
+    better controllable moves only the one of least rank towards the pursued guarantee
+    (``heuristic`` composites: MTSA's DCS returns a director, §3.9)."""
+
+    PERMISSIVE = "permissive"
+    DIRECTOR = "director"
+
+    def __str__(self) -> str:
+        return self.value
+
 # The symbolic solver (``game.solve_symbolic``) calls :func:`extract_controller` without a
 # ``permissive`` argument; the driver sets this variable around the solve so both solvers
 # honour the spec flag.  An explicit ``permissive=`` argument always wins.
 def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
-                       alphabet: frozenset[str], *, permissive: bool = False) -> LTS:
+                       alphabet: frozenset[str], *, permissive: bool = False,
+                       kind: StrategyKind = StrategyKind.PERMISSIVE) -> LTS:
     """MTSA's memoryful controller (§3.6) as an LTS; requires the initial state to win.
 
     ``permissive`` (the spec's ``permissive`` flag) also keeps, from ``(s, j)``, every controllable move ``s -a-> t`` whose target is not an
     allowed successor but is winning for the next memory (``rank[j'][t] ≠ ∞``), as the
     transition ``(s, j) -#w#_a-> (t, j')``.  Those labels are added to the alphabet.  Without
     the flag the result is exactly the non-permissive controller.
+
+    ``kind=DIRECTOR``: of the better controllable moves only the one of least rank (towards
+    ``j'`` from a "may increase" state), ties by label — the director of
+    ``symbolic_strategy`` (module doc there), on the explicit game.
     """
     if not ranks.winning(game.initial):
         raise ValueError("initial state is losing: no controller")
@@ -42,7 +63,7 @@ def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
     A = game.assumptions
     rank, inf = ranks.rank, ranks.inf
 
-    def allowed(s: int, j: int) -> tuple[int, set[int]]:
+    def allowed(s: int, j: int) -> tuple[int, set[int], tuple[int, str, int] | None]:
         jn = (j + 1) % n if s in G[j] else j
         may_increase = s in G[j] or s in F
         ok: set[int] = set()
@@ -57,7 +78,12 @@ def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
                 rt = rank[j][t]
                 if rt < rs or (rt == rs and s not in A[rs % m]):
                     ok.add(t)
-        return jn, ok
+        if kind is StrategyKind.DIRECTOR:  # the one controllable move kept: ``best``
+            r = rank[jn] if may_increase else rank[j]
+            best = min(((r[t], a, t) for a, t in game.edges[s] if a in ctrl and t in ok),
+                       default=None)
+            return jn, set(), best
+        return jn, ok, None
 
     start = (game.initial, 0)
     index = {start: 0}
@@ -68,10 +94,13 @@ def extract_controller(game: ExplicitGame, ranks: Ranks, name: str,
     while q:
         s, j = q.popleft()
         k = index[(s, j)]
-        jn, ok = allowed(s, j)
+        jn, ok, best = allowed(s, j)
         for a, t in game.edges[s]:
             label = a
-            if t not in ok:
+            if kind is StrategyKind.DIRECTOR:
+                if a in ctrl and (best is None or (a, t) != best[1:]):
+                    continue
+            elif t not in ok:
                 # a target reachable by an uncontrollable label is always in ``ok``, so an
                 # excluded target is reached only by controllable labels here
                 if not (permissive and a in ctrl and rank[jn][t] < inf[jn]):
