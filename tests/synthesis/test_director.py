@@ -160,3 +160,20 @@ def test_cli_says_director(tmp_path, capsys):
     assert synth.run(parser.parse_args([str(spec), "C"])) == 0
     out = capsys.readouterr().out
     assert "controller (director): " in out, out
+
+
+def test_director_is_not_refused_by_the_controller_bound():
+    """--max-states is checked up front against |winning region| x |goals| for MTSA's
+    controller; the director, far smaller, is only held to the cap while it is enumerated."""
+    import pytest
+
+    from iterplan_compiler import limits
+
+    previous = limits.set_limits(max_states=2)
+    try:
+        with pytest.raises(limits.LimitReached):
+            synthesize(_choice_problem(("controller",)))
+        director = synthesize(_choice_problem(("heuristic",)))
+    finally:
+        limits.set_limits(previous)
+    assert director.realizable and director.controller.num_states <= 2
