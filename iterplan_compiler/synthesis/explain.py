@@ -384,7 +384,7 @@ def _liveness_play(spec: GameSpec, game: ExplicitGame, losing: set[int], dead: s
     if others:
         out.append(f"  (before the loop it keeps {', '.join(others)} false instead, until the "
                    "controller's choices let it switch)")
-    for label, a in zip((show_formula(f) for f in spec.assumptions), game.assumptions):
+    for label, a in zip((show_formula(f) for f in spec.assumptions), game.assumptions, strict=False):
         where = [str(n) for n, st in enumerate(steps, 1) if n > cut and st.target in a]
         out.append(f"  assumption {label} holds in the loop after step(s) {', '.join(where)}")
     out.append(f"  ... and the loop repeats: {goal} never holds, so the guarantee is "
