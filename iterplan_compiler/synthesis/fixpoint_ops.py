@@ -60,6 +60,11 @@ class FrontierPredecessor(Predecessor, Protocol):
         ``CPre(states)``."""
         ...
 
+    def cpre_gained(self, states: Node, added: Node, within: Node) -> Node:
+        """A subset of ``within ∩ CPre(states ∪ added)`` holding every state of ``within``
+        that is not in ``CPre(states)``."""
+        ...
+
 
 class Memo:
     """``CPre`` with a cache keyed by BDD node (LRU-bounded unless ``size`` is None)."""
@@ -86,9 +91,8 @@ class StateOp:
     """The STATE-kind operator: ``νX. goal ∨ CPre(Y) ∨ (¬A_i ∧ CPre(X))``, inside ``Z``."""
 
     def __init__(self, bdd: Any, cpre: Callable[[Node], Node],
-                 lost: Callable[[Node, Node, Node], Node] | None = None, ratio: int = 0
-                 ) -> None:
-        self.bdd, self.cpre, self.lost, self.ratio = bdd, cpre, lost, ratio
+                 frontier: FrontierPredecessor | None = None, ratio: int = 0) -> None:
+        self.bdd, self.cpre, self.frontier, self.ratio = bdd, cpre, frontier, ratio
 
     def goal(self, g: Node, Z: Node) -> Node:
         return g & self.cpre(Z)
@@ -96,6 +100,13 @@ class StateOp:
     def base(self, goal: Node, Y: Node, Z: Node) -> Node:
         # not restricted to Z: every νX step is intersected with its start ⊆ Z anyway
         return goal | self.cpre(Y)
+
+    def grown_base(self, goal: Node, base: Node, Y: Node, added: Node, Z: Node) -> Node:
+        """``base(goal, Y ∪ added, Z)`` inside ``Z``, from ``base = base(goal, Y, Z)``:
+        ``CPre`` is monotone, so ``CPre(Y ∪ added) = CPre(Y) ∪ gained`` (frontier μY)."""
+        if self.frontier is not None and len(added) * self.ratio < len(Y):
+            return base | self.frontier.cpre_gained(Y, added, Z)
+        return self.base(goal, Y | added, Z)
 
     def x_step(self, base: Node, not_a: Node, X: Node) -> Node:
         if not_a == self.bdd.false:
@@ -108,10 +119,10 @@ class StateOp:
 
     def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
         """``step(X) ∧ start`` for ``X = step(prev) ∧ start ⊆ prev`` (frontier νX)."""
-        if self.lost is not None:
+        if self.frontier is not None:
             removed = prev & ~X
             if len(removed) * self.ratio < len(X):
-                return X & ~self.lost(X, removed, X & ~base)
+                return X & ~self.frontier.cpre_lost(X, removed, X & ~base)
         return self.x_step(base, not_a, X) & start
 
 
@@ -137,6 +148,9 @@ class TransitionOp:
         transition-level here, so: none)."""
         return self.bdd.false
 
+    def grown_base(self, goal: Node, base: Node, Y: Node, added: Node, Z: Node) -> Node:
+        return self.base(goal, Y | added, Z)
+
     def x_next(self, base: Node, not_a: Node, X: Node, prev: Node, start: Node) -> Node:
         return self.x_step(base, not_a, X) & start
 
@@ -155,12 +169,20 @@ class CallablePre:
 
 
 class CallableFrontierPre(CallablePre):
-    """``cpre`` and ``cpre_lost`` functions as a :class:`FrontierPredecessor`."""
+    """``cpre``, ``cpre_lost`` and (optional) ``cpre_gained`` functions as a
+    :class:`FrontierPredecessor`; without ``cpre_gained``, ``CPre(states ∪ added)``."""
 
     def __init__(self, cpre: Callable[[Node], Node],
-                 lost: Callable[[Node, Node, Node], Node]) -> None:
+                 lost: Callable[[Node, Node, Node], Node],
+                 gained: Callable[[Node, Node, Node], Node] | None = None) -> None:
         super().__init__(cpre)
         self._lost = lost
+        self._gained = gained
 
     def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
         return self._lost(states, removed, within)
+
+    def cpre_gained(self, states: Node, added: Node, within: Node) -> Node:
+        if self._gained is None:
+            return within & self._cpre(states | added)
+        return self._gained(states, added, within)

@@ -146,3 +146,4 @@ def cluster(bdd: Any, v: Vars, groups: list[Group], max_nodes: int) -> list[Grou
             continue
         out.extend(part)
     return out
+

@@ -310,10 +310,34 @@ class SymbolicGame:
         cand = within & self.ctrl_owned & self._pre_of(True, removed)
         if cand == b.false:
             return env_lost
-        succ = disjoin(b, [b.let(g.unprime, and_exists(b, g.rel, cand, g.cur_vars))
-                           for g in self.groups if g.controllable])
+        succ = self._post_of(True, cand)
         keep = cand & self._pre_of(True, cofactor(b, X & self.live, succ))
         return env_lost | (cand & ~keep)
+
+    def cpre_gained(self, X: Node, added: Node, within: Node) -> Node:
+        """States of ``within`` in ``CPre(X ∪ added)``, at least those outside ``CPre(X)``
+        (:class:`fixpoint_ops.FrontierPredecessor`; the μY direction: ``Y`` grows).
+
+        The dual of :meth:`cpre_lost`: a controller state enters iff it has a controllable
+        successor in ``added`` (it had none in ``X``); an environment state can enter only
+        if one of its uncontrollable successors is in ``added`` (``cand``; otherwise all are
+        in ``X`` and it was in ``CPre(X)`` already), and it is in iff none is outside
+        ``X ∪ added`` — a check that reads successors of ``cand`` only, so the complement
+        may be replaced by its generalised cofactor on them."""
+        b = self.bdd
+        added = added & self.live
+        gained = within & self.ctrl_owned & self._pre_of(True, added)
+        cand = within & self.env & self._pre_of(False, added)
+        if cand == b.false:
+            return gained
+        bad = cofactor(b, ~((X | added) & self.live), self._post_of(False, cand))
+        return gained | (cand & ~self._pre_of(False, bad))
+
+    def _post_of(self, controllable: bool, X: Node) -> Node:
+        """Successors of ``X`` (current variables) over the groups of one controllability."""
+        b = self.bdd
+        return disjoin(b, [b.let(g.unprime, and_exists(b, g.rel, X, g.cur_vars))
+                           for g in self.groups if g.controllable == controllable])
 
     def restrict(self, care: Node) -> None:
         """Restrict the framed relations to ``care`` (e.g. the reachable states) at both

@@ -1,5 +1,6 @@
-"""The frontier νX (fixpoint.FrontierPredecessor, SymbolicGame.cpre_lost): ``cpre_lost``
-against its definition on random sets, and the engine with and without it."""
+"""The frontier νX and μY (fixpoint_ops.FrontierPredecessor, SymbolicGame.cpre_lost and
+cpre_gained): both against their definitions on random sets, and the engine with and without
+them (same winning region, same iteration counts)."""
 
 from __future__ import annotations
 
@@ -48,10 +49,12 @@ def test_frontier_keeps_the_winning_region(prob):
     goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
     plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach)
     for ratio in (1, 8):
-        fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
-                           cpre_lost=g.cpre_lost, frontier_ratio=ratio)
-        assert fast.winning == plain.winning
-        assert fast.iterations == plain.iterations  # the same iterates, step by step
+        for gained in (None, g.cpre_gained):
+            fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
+                               cpre_lost=g.cpre_lost, cpre_gained=gained,
+                               frontier_ratio=ratio)
+            assert fast.winning == plain.winning
+            assert fast.iterations == plain.iterations  # the same iterates, step by step
 
 
 def test_frontier_on_door_patrol():
@@ -60,6 +63,25 @@ def test_frontier_on_door_patrol():
     goals = [gj | g.failures for gj in g.guarantees]
     plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach, frontier_ratio=0)
     fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
-                       cpre_lost=g.cpre_lost, frontier_ratio=1)
+                       cpre_lost=g.cpre_lost, cpre_gained=g.cpre_gained, frontier_ratio=1)
     assert fast.winning == plain.winning and fast.iterations == plain.iterations
     assert (fast.winning & g.init) != g.bdd.false
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_cpre_gained_is_the_growth_of_cpre(prob):
+    """``CPre(Y) ∪ cpre_gained(Y, A, W) = (CPre(Y) ∪ W) ∩ CPre(Y ∪ A)`` on ``W``, and it
+    stays inside ``W ∩ CPre(Y ∪ A)`` (the frontier μY's contract)."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        reach = g.reachable() & g.live
+        rng = random.Random(1)
+        for _ in range(4):
+            grown = _random_subset(g, reach, rng)
+            Y = _random_subset(g, grown, rng)
+            within = _random_subset(g, reach, rng) | reach & ~g.cpre(Y)
+            got = g.cpre_gained(Y, grown & ~Y, within)
+            want = within & g.cpre(grown)
+            assert got & ~want == g.bdd.false  # sound
+            assert (within & ~g.cpre(Y)) & want & ~got == g.bdd.false  # complete

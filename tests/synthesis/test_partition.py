@@ -1,0 +1,39 @@
+"""The partitioned relation (synthesis/partition.py): merging the groups of one
+controllability into a framed relation (``cluster``) keeps the relation, shared fluent
+variables included."""
+
+from __future__ import annotations
+
+from hypothesis import HealthCheck, given, settings
+from test_agreement import problems
+
+from iterplan_compiler.synthesis.encode import prepare
+from iterplan_compiler.synthesis.partition import cluster, framed_to, is_framed, owner_groups
+from iterplan_compiler.synthesis.recode import recode_leaves
+from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
+
+
+def _relation(g: SymbolicGame, groups, controllable: bool):
+    """The full relation of one controllability: every group framed on what it keeps."""
+    b = g.bdd
+    out = b.false
+    for grp in groups:
+        if grp.controllable == controllable:
+            out |= grp.rel & framed_to(b, g.vars, grp.cur_vars)
+    return out
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_cluster_keeps_the_relation(prob):
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        # the partitioned groups, as they are before clustering
+        rels = [g._component_relation(k, c) for k, c in enumerate(spec.components)]
+        parts = owner_groups(g.bdd, g.vars, spec.components, spec.controllable, rels)
+        merged = cluster(g.bdd, g.vars, parts, 10**9)
+        for c in (True, False):
+            assert _relation(g, merged, c) == _relation(g, parts, c)
+            if sum(grp.controllable == c for grp in parts) > 1:
+                framed = [grp for grp in merged if grp.controllable == c]
+                assert len(framed) == 1 and is_framed(g.vars, framed[0])
