@@ -74,12 +74,14 @@ def main(argv: list[str] | None = None) -> int:
         gr1.make_streett_transducer(z, yij, xijk, aut)
         nodes = len(aut.action["impl"])
     t3 = time.perf_counter()
+    c3 = time.process_time()
     out = {
         "realizable": bool(realizable),
         "build_s": t1 - t0,
         "winning_s": t2 - t1,
         "winning_cpu_s": c2 - c1,
         "strategy_s": t3 - t2,
+        "strategy_cpu_s": c3 - c2,
         "total_s": t3 - t0,
         "strategy_nodes": nodes,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
