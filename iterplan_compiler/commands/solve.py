@@ -9,6 +9,8 @@ import argparse
 import json
 import sys
 
+from iterplan_compiler.gr1.strategy import StrategyOptions, StrategyReordering
+
 HELP = "GR(1) realizability/strategy for a slugsin (or structuredslugs) file"
 
 
@@ -43,6 +45,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="do not stop as soon as the initial states are lost")
     parser.add_argument("--chained", action="store_true",
                         help="Gauss-Seidel μY (realizability-only runs; see synthesis/fixpoint.py)")
+    parser.add_argument("--strategy-reordering", choices=[m.value for m in StrategyReordering],
+                        default=StrategyOptions().reordering.value,
+                        help="CUDD reordering while the strategy is built: dynamic (default: "
+                        "CUDD's automatic sifting), guarded (dynamic off, an explicit sift "
+                        "when the manager doubled), off")
+    parser.add_argument("--no-strategy-final-sift", action="store_true",
+                        help="no sifting pass once the strategy relations exist")
+    parser.add_argument("--no-strategy-restrict", action="store_true",
+                        help="keep S_j ∧ Win instead of simplifying S_j by restrict to the "
+                        "care set Win ∧ ρe")
     parser.add_argument("--json", action="store_true", help="print statistics as JSON")
 
 
@@ -82,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
         recycle=args.recycle,
         chained=args.chained,
     )
+    stopt = StrategyOptions(reordering=StrategyReordering(args.strategy_reordering),
+                            final_sift=not args.no_strategy_final_sift,
+                            restrict=not args.no_strategy_restrict)
     res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,
-                       solver_options=sopt)
+                       solver_options=sopt, strategy_options=stopt)
     if diags:
         print(render(diags, sources), file=sys.stderr)
     if res is None:

@@ -27,7 +27,7 @@ from typing import Any
 from iterplan_compiler.diagnostics import Diagnostic
 from iterplan_compiler.gr1.game import Game, GameOptions, build_game
 from iterplan_compiler.gr1.slugsin import SlugsSpec
-from iterplan_compiler.gr1.strategy import build_strategy
+from iterplan_compiler.gr1.strategy import StrategyOptions, build_strategy
 from iterplan_compiler.symbolic.bdd import new_manager
 from iterplan_compiler.synthesis.fixpoint import (
     SLUGS_OPTIONS,
@@ -89,7 +89,8 @@ def peak_rss_mb() -> float:
 
 
 def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions | None = None,
-          solver_options: SolverOptions | None = None, bdd: Any = None
+          solver_options: SolverOptions | None = None, bdd: Any = None,
+          strategy_options: StrategyOptions | None = None
           ) -> tuple[SolveResult | None, list[Diagnostic]]:
     """Build the game of ``spec``, decide realizability and (optionally) extract a strategy.
 
@@ -115,7 +116,7 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
     strat = None
     stats: dict[str, Any] = dict(game.stats)
     if realizable and strategy:
-        strat = build_strategy(game, win)
+        strat = build_strategy(game, win, strategy_options)
         stats["strategy_nodes"] = strat.node_count()
     t3 = time.perf_counter()
     c3 = time.process_time()
