@@ -240,11 +240,13 @@ def build_strategy(game: Game, win: Winning, options: StrategyOptions | None = N
     can_sift = _dynamic_reordering(bdd)
     mode = options.reordering if can_sift else StrategyReordering.OFF
     zp = game.prime(win.winning)
+    # the monolithic relations are built (once) under the manager's own reordering setting
+    care = win.winning & game.env_trans if options.restrict else None
+    _ = game.sys_trans
     plain: list[Node] = []
     restricted: list[Node] = []
     with _reordering(bdd, mode is StrategyReordering.DYNAMIC and can_sift):
         guard = _Guard(bdd, mode is StrategyReordering.GUARDED, options.guard_growth)
-        care = win.winning & game.env_trans if options.restrict else None
         for j in range(len(game.sys_live)):
             s = _goal_relation(game, win, j, zp, guard)
             plain.append(s & win.winning)
