@@ -33,6 +33,8 @@ CHOICES = ("fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table", "all")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from iterplan_compiler.experiments.missions import VehicleKind
+
     parser.add_argument("name", choices=CHOICES, help="which experiment")
     parser.add_argument("--quick", action="store_true",
                         help="small sizes (seconds; what CI runs)")
@@ -49,7 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run on the Dask cluster at ADDR, e.g. tcp://host:8786 (default "
                              "with --jobs > 1: a dask.distributed LocalCluster of that many "
                              "workers; pip install 'iterplan[experiments]')")
-    parser.add_argument("--vehicle", choices=("sitl", "paper"), default="sitl",
+    parser.add_argument("--vehicle", choices=[k.value for k in VehicleKind],
+                        default=VehicleKind.SITL.value,
                         help="simulated aircraft: the SITL-calibrated simulator at the "
                              "paper's 17 m/s cruise (default) or the plain kinematic model")
     parser.add_argument("--out", "-o", default="iterplan-experiments",

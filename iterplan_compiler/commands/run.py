@@ -22,15 +22,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from iterplan_compiler.runtime.runfiles import positive_float, sigterm_as_interrupt
+from iterplan_compiler.runtime.vehicle import SafeAction, Start
 
 if TYPE_CHECKING:
     from iterplan_compiler.runtime.controller import ControllerTable
     from iterplan_compiler.runtime.executor import Executor, RunConfig
     from iterplan_compiler.runtime.grid import GridMap
+    from iterplan_compiler.runtime.planner import PlannerMode
 
 HELP = "run a generated controller on the simulator or a MAVLink vehicle"
 
-SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
+SAFE_ACTIONS = tuple(a.value for a in SafeAction)
 
 
 def add_arrival_arguments(parser: argparse.ArgumentParser, *, paper_default: bool) -> None:
@@ -64,17 +66,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
     """The controller, map, vehicle and how the mission is ordered and ended."""
+    from iterplan_compiler.runtime.sorter import SorterKind
+
     parser.add_argument("controller", metavar="CONTROLLER.py",
                         help="controller module (from `iterc compile`)")
     parser.add_argument("--map", required=True, help="map file (JSON)")
     parser.add_argument("--vehicle", choices=("sim", "mavlink"), default="sim")
     parser.add_argument("--connect", default="tcp:127.0.0.1:5760",
                         help="MAVLink connection string (with --vehicle mavlink)")
-    parser.add_argument("--start", choices=("auto", "ground", "airborne"), default="auto",
+    parser.add_argument("--start", choices=[s.value for s in Start], default=Start.AUTO.value,
                         help="take off from the ground, take over a flying vehicle, or pick by "
                              "what the vehicle reports (default)")
-    parser.add_argument("--sorter", choices=("distance", "last", "random", "tour"),
-                        default="distance",
+    parser.add_argument("--sorter", choices=[k.value for k in SorterKind],
+                        default=SorterKind.DISTANCE.value,
                         help="order of the locations: the paper's distance (greedy Dubins), "
                              "last, random; or tour (a planned tour over the cells the map's "
                              "sensors mark, docs/runtime.md)")
@@ -101,7 +105,9 @@ def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _add_flight_arguments(parser: argparse.ArgumentParser) -> None:
     """Path following, the airframe's figures and the simulator's calibration."""
-    parser.add_argument("--planner", choices=("course", "carrot"), default=None,
+    from iterplan_compiler.runtime.planner import PlannerMode
+
+    parser.add_argument("--planner", choices=[m.value for m in PlannerMode], default=None,
                         help="path following: course hold or fly-to carrots "
                              "(default: course on sim, carrot on mavlink)")
     parser.add_argument("--airspeed", type=positive_float, default=None, metavar="M/S",
@@ -123,11 +129,11 @@ def _add_flight_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
     """Safe states, readiness, wind and the output files."""
-    parser.add_argument("--on-end", choices=SAFE_ACTIONS, default="loiter",
+    parser.add_argument("--on-end", choices=SAFE_ACTIONS, default=SafeAction.LOITER.value,
                         help="what to command when the mission completes or is interrupted "
                              "(Ctrl-C, SIGTERM): loiter over the map centre (default), rtl, "
                              "land, none")
-    parser.add_argument("--on-fault", choices=SAFE_ACTIONS, default="rtl",
+    parser.add_argument("--on-fault", choices=SAFE_ACTIONS, default=SafeAction.RTL.value,
                         help="what to command when the mission ends on a fault (GPS or "
                              "telemetry lost, a refused command, controller or planner error, "
                              "time limit); default rtl.  After a pilot/failsafe mode change, a "
@@ -229,7 +235,8 @@ def _load_inputs(args: argparse.Namespace, until: tuple[str, int] | None
 
 
 def _run_config(args: argparse.Namespace, table: ControllerTable,
-                until: tuple[str, int] | None, passes: int, *, mode: str, wind_margin: float,
+                until: tuple[str, int] | None, passes: int, *, mode: PlannerMode,
+                wind_margin: float,
                 altitude: float, progress: Callable[[str], None] | None,
                 observe: Callable[[Executor, bool], None] | None) -> RunConfig:
     """The executor's :class:`RunConfig` from the flags and what :func:`run` resolved."""
@@ -238,7 +245,6 @@ def _run_config(args: argparse.Namespace, table: ControllerTable,
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
     from iterplan_compiler.runtime.runfiles import until_hook
     from iterplan_compiler.runtime.sorter import SorterKind
-    from iterplan_compiler.runtime.vehicle import SafeAction, Start
     from iterplan_compiler.view import cli as view_cli
 
     return RunConfig(sorter=SorterKind(args.sorter),
@@ -299,16 +305,22 @@ def _options(args: argparse.Namespace
 
 
 def _vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
-             wind: tuple[float, float], altitude: float, progress: Any) -> tuple[Any, str]:
+             wind: tuple[float, float], altitude: float, progress: Any
+             ) -> tuple[Any, PlannerMode]:
     """The vehicle to fly and the planner mode to fly it with."""
+    from iterplan_compiler.runtime.planner import PlannerMode
+
+    chosen = PlannerMode(args.planner) if args.planner is not None else None
     if args.vehicle == "sim":
         vehicle = _sim_vehicle(args, grid, params, wind, altitude)
-        return vehicle, args.planner or ("carrot" if params else "course")  # calibrated
+        if chosen is None:   # calibrated simulator: the path follower flown on SITL
+            chosen = PlannerMode.CARROT if params else PlannerMode.COURSE
+        return vehicle, chosen
     from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
     link = LinkConfig(ready_timeout=args.ready_timeout, airspeed=args.airspeed,
                       loiter_radius=args.loiter_radius)
     vehicle = MavlinkVehicle.connect(args.connect, grid.frame, link, progress=progress)
-    return vehicle, args.planner or "carrot"
+    return vehicle, chosen if chosen is not None else PlannerMode.CARROT
 
 
 def _print_summary(result: Any, out: Path) -> None:

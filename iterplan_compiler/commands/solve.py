@@ -9,6 +9,7 @@ import argparse
 import json
 import sys
 
+from iterplan_compiler.gr1.game import GameOrder
 from iterplan_compiler.gr1.strategy import StrategyOptions, StrategyReordering
 
 HELP = "GR(1) realizability/strategy for a slugsin (or structuredslugs) file"
@@ -21,7 +22,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="input format (default: by extension, .structuredslugs or slugsin)")
     parser.add_argument("--realizability-only", action="store_true",
                         help="decide realizability only: keep no iterates, build no strategy")
-    parser.add_argument("--order", choices=("interleaved", "blocked", "spec"), default="interleaved",
+    parser.add_argument("--order", choices=[o.value for o in GameOrder],
+                        default=GameOrder.INTERLEAVED.value,
                         help="initial BDD variable order (default: x next to x')")
     parser.add_argument("--group-pairs", action="store_true",
                         help="reorder each variable together with its primed copy")
@@ -80,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     if spec is None:
         return 1
     gopt = GameOptions(
-        order=args.order,
+        order=GameOrder(args.order),
         group_pairs=args.group_pairs,
         reordering=not args.no_reorder,
         sift_after_build=not args.no_sift_after_build,

@@ -26,8 +26,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from iterplan_compiler.experiments.pipeline import StageError
+
+if TYPE_CHECKING:
+    from iterplan_compiler.runtime.sorter import SorterKind
 
 
 @dataclass(frozen=True)
@@ -83,7 +87,7 @@ def example_bindings(grid, data: dict | None):
     return map_rule_bindings(grid, dynamic=dynamic, derived=derived)
 
 
-def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
+def fly(module_path: Path, grid, *, sorter: SorterKind | str = "distance", seed: int = 0,
         stop: Callable[[LogEvent], bool] | None = None, max_time: float = 6 * 3600.0,
         compute_time: bool = True, on_event: Callable[[LogEvent], None] | None = None,
         map_data: dict | None = None, full_log: bool = False,
@@ -92,7 +96,8 @@ def fly(module_path: Path, grid, *, sorter: str = "distance", seed: int = 0,
         params: object | None = None, arrival: tuple[object, object] | None = None
         ) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
-    ``max_time`` simulated seconds).  ``fast_skip``: the executor's fast skip
+    ``max_time`` simulated seconds) with the ``sorter`` strategy (a :class:`SorterKind`, or
+    its value: the sweeps' cases carry the names they write to their CSV files).  ``fast_skip``: the executor's fast skip
     (``runtime/skip.py``), with ``has.next``/``y.next`` left out of the compact log so that
     skip cycles can be skipped.  ``observe``/``realtime`` go to the executor's RunConfig
     (the live view, ``iterc demo --view``).  ``heading``: the launch heading (default the

@@ -12,9 +12,9 @@ Raman CAV'16):
 
 Design choices (all measurable, see ``docs/gr1.md``):
 
-* **Variable order** — ``"interleaved"`` (default; slugs' choice: each bit next to its
-  primed copy, in declaration order) or ``"blocked"`` (gr1c's: all current bits, then all
-  primed bits).  ``group_pairs`` ties each ``(v, v')`` pair into a CUDD reordering group so
+* **Variable order** (:class:`GameOrder`) — ``INTERLEAVED`` (default; slugs' choice: each bit
+  next to its primed copy, in declaration order), ``BLOCKED`` (gr1c's: all current bits, then
+  all primed bits) or ``SPEC`` (interleaved, in order of first occurrence, :func:`spec_order`).  ``group_pairs`` ties each ``(v, v')`` pair into a CUDD reordering group so
   sifting moves them together (Spectra's "reorder with grouping").
 * **Partitioned transition relations** — every TRANS line is one conjunct; consecutive
   conjuncts are clustered up to ``cluster_nodes`` BDD nodes and each cluster carries the
@@ -24,6 +24,7 @@ Design choices (all measurable, see ``docs/gr1.md``):
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,11 +40,19 @@ def prime_name(name: str) -> str:
     return name + "'"
 
 
+class GameOrder(enum.Enum):
+    """Initial BDD variable order of a game (``iterc solve --order``)."""
+
+    INTERLEAVED = "interleaved"   # each bit next to its primed copy, in declaration order
+    BLOCKED = "blocked"           # all current bits, then all primed bits
+    SPEC = "spec"                 # interleaved, in order of first occurrence (spec_order)
+
+
 @dataclass(frozen=True)
 class GameOptions:
     """How to build the BDDs of a game.
 
-    ``order``: ``"interleaved"``, ``"blocked"`` or ``"spec"`` (:func:`spec_order`);
+    ``order``: a :class:`GameOrder`;
     ``group_pairs``: CUDD reordering groups for ``(v, v')`` (interleaved order only);
     ``reordering``: CUDD dynamic reordering (group sifting, the only method dd exposes);
     ``sift_after_build``: with ``reordering``, one explicit sifting pass once the
@@ -53,7 +62,7 @@ class GameOptions:
     (otherwise one monolithic BDD per player); ``cluster_nodes``: cluster size bound.
     """
 
-    order: str = "interleaved"
+    order: GameOrder = GameOrder.INTERLEAVED
     group_pairs: bool = False
     reordering: bool = True
     sift_after_build: bool = True
@@ -268,7 +277,7 @@ def spec_order(spec: SlugsSpec) -> list[str]:
 
 
 def _declare(bdd: Any, names: Sequence[str], options: GameOptions) -> None:
-    if options.order == "blocked":
+    if options.order is GameOrder.BLOCKED:
         bdd.declare(*names)
         bdd.declare(*(prime_name(v) for v in names))
         return
@@ -380,7 +389,8 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
     if options.max_growth is not None:
         cfg["max_growth"] = options.max_growth
     bdd.configure(**cfg)
-    names = spec_order(spec) if options.order == "spec" else list(spec.inputs) + list(spec.outputs)
+    names = (spec_order(spec) if options.order is GameOrder.SPEC
+             else list(spec.inputs) + list(spec.outputs))
     _declare(bdd, names, options)
 
     memo: dict[int, Node] = {}

@@ -20,9 +20,14 @@ from pathlib import Path
 from typing import Any
 
 from iterplan_compiler.mavproxy.link import ModuleLink
+from iterplan_compiler.runtime.planner import PlannerMode
 from iterplan_compiler.runtime.runfiles import positive_float
+from iterplan_compiler.runtime.sorter import SorterKind
+from iterplan_compiler.runtime.vehicle import SafeAction, Start
 
-SAFE_ACTIONS = ("loiter", "rtl", "land", "none")
+SAFE_ACTIONS = tuple(a.value for a in SafeAction)
+#: ``iterplan run --sorter``: the paper's three (the tour needs the map's sensors up front)
+SORTERS = tuple(k.value for k in SorterKind if k is not SorterKind.TOUR)
 
 
 class UsageError(Exception):
@@ -51,22 +56,23 @@ def run_parser() -> argparse.ArgumentParser:
     p.add_argument("map", metavar="MAP.json")
     p.add_argument("--until", default=None, metavar="LABEL[:K]",
                    help="end the mission (successfully) at the K-th event LABEL (default K=1)")
-    p.add_argument("--on-end", choices=SAFE_ACTIONS, default="loiter",
+    p.add_argument("--on-end", choices=SAFE_ACTIONS, default=SafeAction.LOITER.value,
                    help="commanded when the mission completes or on `iterplan stop` "
                         "(default loiter over the map centre)")
-    p.add_argument("--on-fault", choices=SAFE_ACTIONS, default="rtl",
+    p.add_argument("--on-fault", choices=SAFE_ACTIONS, default=SafeAction.RTL.value,
                    help="commanded when the mission ends on a fault (default rtl)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="output folder (default: iterplan-YYYYmmdd-HHMMSS in MAVProxy's log "
                         "folder, else the working folder)")
-    p.add_argument("--start", choices=("auto", "ground", "airborne"), default="auto")
+    p.add_argument("--start", choices=[s.value for s in Start], default=Start.AUTO.value)
     p.add_argument("--passes", type=int, default=None,
                    help="stop after this many iterator passes (0: no limit; default 1, "
                         "or 0 with --until)")
-    p.add_argument("--sorter", choices=("distance", "last", "random"), default="distance")
+    p.add_argument("--sorter", choices=SORTERS, default=SorterKind.DISTANCE.value)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-time", type=positive_float, default=4 * 3600.0, metavar="S")
-    p.add_argument("--planner", choices=("course", "carrot"), default="carrot")
+    p.add_argument("--planner", choices=[m.value for m in PlannerMode],
+                   default=PlannerMode.CARROT.value)
     p.add_argument("--airspeed", type=positive_float, default=None, metavar="M/S")
     p.add_argument("--turn-radius", type=positive_float, default=None, metavar="M")
     p.add_argument("--loiter-radius", type=positive_float, default=None, metavar="M")
@@ -212,7 +218,7 @@ class Mission:
         from iterplan_compiler.runtime.mapfile import load_map
         from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkVehicle
         from iterplan_compiler.runtime.runfiles import check_out, until_hook, write_outputs
-        from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleError
+        from iterplan_compiler.runtime.vehicle import VehicleError
 
         a = self.args
         self.phase = "loading"
@@ -245,9 +251,9 @@ class Mission:
                 vehicle.start_link("MAVProxy's master link")
                 if self.on_fly is not None:
                     self.on_fly()
-                cfg = RunConfig(sorter=a.sorter, seed=a.seed, passes=passes,
+                cfg = RunConfig(sorter=SorterKind(a.sorter), seed=a.seed, passes=passes,
                                 max_time=a.max_time, max_wall=a.max_time,
-                                planner_mode=a.planner, wind=a.wind_margin,
+                                planner_mode=PlannerMode(a.planner), wind=a.wind_margin,
                                 altitude=a.altitude if a.altitude is not None else grid.altitude,
                                 turn_radius=a.turn_radius, start=Start(a.start),
                                 end_action=SafeAction(a.on_end),

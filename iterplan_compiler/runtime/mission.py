@@ -14,6 +14,7 @@ from iterplan_compiler.runtime.planner import (
     ArrivalHeadings,
     HeadingChoice,
     MotionPlanner,
+    PlannerMode,
     shortest_csc,
 )
 from iterplan_compiler.runtime.shadow import Prediction, Shadow
@@ -45,7 +46,7 @@ class RunConfig:
     #: over ground downwind, 1.4 x r_min x ((V + wind) / V)^2
     wind: float = 0.0
     parallel: bool = True           # arrive parallel to the fixed direction (either way)
-    planner_mode: str = "course"
+    planner_mode: PlannerMode = PlannerMode.COURSE
     lead: float | None = None
     accept: float | None = None
     end_action: SafeAction = SafeAction.LOITER   # commanded when the mission completes or

@@ -8,10 +8,10 @@ the Sorter ranks locations by.
 
 Following: the path is sampled every ``ds`` metres and extended straight beyond the target along
 the arrival heading.  Each :meth:`MotionPlanner.update` projects the vehicle onto the path and
-commands either a course towards a point ``lookahead`` metres further on (``mode="course"``:
+commands either a course towards a point ``lookahead`` metres further on (``PlannerMode.COURSE``:
 ArduPlane GUIDED_CHANGE_HEADING / the simulator's course hold), or a GUIDED fly-to "carrot" far
 placed ``carrot_distance`` metres out along that same pursuit course, far enough that the
-autopilot never reaches its loiter capture (``mode="carrot"``: plain MISSION_ITEM_INT fly-to).
+autopilot never reaches its loiter capture (``PlannerMode.CARROT``: plain MISSION_ITEM_INT fly-to).
 
 Visiting: a fixed wing never stops, and ArduPlane's own "reached" fires 100+ m out, so the
 planner decides: the target counts as visited (``arrived``) once the vehicle is within
@@ -50,6 +50,13 @@ def _m(a: float) -> float:
     if a < 0:
         a += TWO_PI
     return 0.0 if a > TWO_PI - 1e-9 else a
+
+
+class PlannerMode(enum.Enum):
+    """How the planner follows its path (``iterc run --planner``)."""
+
+    COURSE = "course"   # course hold towards the look-ahead point (the simulator's default)
+    CARROT = "carrot"   # GUIDED fly-to points far out along that course (MAVLink's default)
 
 
 class ArrivalHeadings(enum.Enum):
@@ -176,12 +183,13 @@ class MotionPlanner:
     def __init__(self, vehicle: Vehicle, *, radius: float, arrival_heading: float,
                  parallel: bool = True, cell_size: float = 50.0, lead: float | None = None,
                  accept: float | None = None, lookahead: float | None = None,
-                 mode: str = "course", ds: float = 2.0, max_misses: int = 12,
+                 mode: PlannerMode = PlannerMode.COURSE, ds: float = 2.0,
+                 max_misses: int = 12,
                  carrot_distance: float = 400.0, max_lead: float = 4.0,
                  headings: ArrivalHeadings = ArrivalHeadings.PARALLEL,
                  choice: HeadingChoice = HeadingChoice.SHORTEST):
-        if mode not in ("course", "carrot"):
-            raise ValueError(f"unknown planner mode {mode!r}")
+        if not isinstance(mode, PlannerMode):
+            raise TypeError(f"planner mode must be a PlannerMode, not {mode!r}")
         self.admissible = admissible_headings(arrival_heading, parallel, headings)
         self.choice = choice
         self._fixed: tuple[float, ...] | None = None   # the heading chosen for this target
@@ -362,7 +370,7 @@ class MotionPlanner:
         k = min(self._idx + max(1, int(self.lookahead / self.ds)), len(self._px) - 1)
         cx, cy = float(self._px[k]), float(self._py[k])
         course = math.atan2(cy - p.y, cx - p.x)   # pure pursuit of the look-ahead point
-        if self.mode == "course":
+        if self.mode is PlannerMode.COURSE:
             self.last_cmd = ("course", course, 0.0)
             self.vehicle.steer(course)
         else:

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from iterplan_compiler.diagnostics import NO_SPAN
-from iterplan_compiler.gr1.game import GameOptions
+from iterplan_compiler.gr1.game import GameOptions, GameOrder
 from iterplan_compiler.gr1.slugsin import Expr, Line, SlugsSpec, parse, write
 from iterplan_compiler.gr1.solve import SolverOptions, solve
 from iterplan_compiler.oracle.gr1_explicit import check_strategy, explicit_game, solve_explicit
@@ -64,14 +64,14 @@ def specs(draw, allow_primed_live: bool = True):
 
 CONFIGS = [
     (GameOptions(), SolverOptions()),
-    (GameOptions(partition=False, order="blocked"), SolverOptions(feedback=False, recycle=False,
+    (GameOptions(partition=False, order=GameOrder.BLOCKED), SolverOptions(feedback=False, recycle=False,
                                                                    early_unrealizable=False)),
     (GameOptions(group_pairs=True, cluster_nodes=1), SolverOptions(recycle=False)),
     # the MTSA defaults of the one engine (recycling, chained μY) on slugs games
     # (chained μY applies only without iterates: that config runs realizability-only)
-    (GameOptions(reordering=False, order="spec"), SolverOptions(recycle=True, chained=True,
+    (GameOptions(reordering=False, order=GameOrder.SPEC), SolverOptions(recycle=True, chained=True,
                                                                 early_unrealizable=False)),
-    (GameOptions(order="spec"), SolverOptions(recycle=True, feedback=False)),
+    (GameOptions(order=GameOrder.SPEC), SolverOptions(recycle=True, feedback=False)),
 ]
 
 

@@ -10,6 +10,7 @@ from iterplan_compiler.runtime.bindings import BindingError, Bindings, canon
 from iterplan_compiler.runtime.controller import Controller, ControllerTable, run_bindings
 from iterplan_compiler.runtime.executor import Executor, RunConfig, ideal_distance, load_controller
 from iterplan_compiler.runtime.mapfile import load_map
+from iterplan_compiler.runtime.planner import PlannerMode
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 from tests.runtime.fire_patrol import TABLE
 
@@ -227,7 +228,7 @@ def test_compute_clock_is_used_and_think_time_becomes_flight_time():
     assert slow.summary["distance_m"] > 0.9 * 18.2 * slow.summary["compute_s"]
 
 
-@pytest.mark.parametrize("mode", ["course", "carrot"])
+@pytest.mark.parametrize("mode", list(PlannerMode))
 def test_fire_patrol_in_strong_gusty_wind(mode):
     # 6.7 m/s wind (37 % of airspeed) plus gusts: with the wind-aware planning radius every
     # patrol cell is still visited, inside the cell, without misses piling up.

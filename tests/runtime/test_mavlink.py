@@ -16,6 +16,7 @@ from iterplan_compiler.runtime.executor import Executor, RunConfig
 from iterplan_compiler.runtime.loopback import LoopbackAutopilot
 from iterplan_compiler.runtime.mapfile import load_map
 from iterplan_compiler.runtime.mavlink import LinkConfig, MavlinkError, MavlinkVehicle, mav
+from iterplan_compiler.runtime.planner import PlannerMode
 from iterplan_compiler.runtime.sim import SimParams, SimVehicle
 from iterplan_compiler.runtime.vehicle import SafeAction, Start
 from tests.runtime.fire_patrol import TABLE
@@ -189,7 +190,7 @@ def test_faults_are_detected(link, fault, inject):
 
 def test_fire_patrol_over_mavlink_ends_loitering_over_the_map(link):
     grid, sim, peer, v = link
-    cfg = RunConfig(planner_mode="carrot", tick=0.5, altitude=40)
+    cfg = RunConfig(planner_mode=PlannerMode.CARROT, tick=0.5, altitude=40)
     r = Executor(TABLE, grid, v, config=cfg).run()
     assert r.ok, r.reason
     assert sorted(c for _, c, _, _ in r.arrivals) == sorted(grid.sensors["inP"].tolist())
@@ -207,7 +208,7 @@ def test_fault_mid_mission_ends_with_rtl(link):
         if n["go"] == 2:
             peer.gps_fix = 1
         return False
-    cfg = RunConfig(planner_mode="carrot", tick=0.5, altitude=40, on_event=on_event,
+    cfg = RunConfig(planner_mode=PlannerMode.CARROT, tick=0.5, altitude=40, on_event=on_event,
                     fault_action=SafeAction.RTL)
     r = Executor(TABLE, grid, v, config=cfg).run()
     assert not r.ok and r.reason.startswith("gps_lost")
@@ -326,7 +327,8 @@ def test_refused_mode_change_ends_the_mission(link):
     grid, sim, peer, v = link
     original = peer._set_mode
     peer._set_mode = lambda custom: False if int(custom) == 13 else original(custom)  # TAKEOFF
-    r = Executor(TABLE, grid, v, config=RunConfig(planner_mode="carrot", tick=0.5)).run()
+    cfg = RunConfig(planner_mode=PlannerMode.CARROT, tick=0.5)
+    r = Executor(TABLE, grid, v, config=cfg).run()
     assert not r.ok and r.reason.startswith("mode change to TAKEOFF refused (FAILED)")
     assert "vehicle is in MANUAL" in r.reason
     assert r.summary["safe_state"] == "disarmed on the ground" and not sim.armed

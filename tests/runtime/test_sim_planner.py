@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from iterplan_compiler.runtime.planner import MotionPlanner, shortest_csc
+from iterplan_compiler.runtime.planner import MotionPlanner, PlannerMode, shortest_csc
 from iterplan_compiler.runtime.sim import G, SimParams, SimVehicle
 from iterplan_compiler.runtime.sorter import Pose, dubins_lengths
 from tests.runtime.dubins_ref import csc_length
@@ -119,7 +119,7 @@ def test_planner_path_is_shortest_csc(x, y, h0, h1, r):
     assert abs(float(k[0]) - path.length) < 0.05 + 2e-5 * path.length
 
 
-@pytest.mark.parametrize("mode", ["course", "carrot"])
+@pytest.mark.parametrize("mode", list(PlannerMode))
 def test_planner_visits_targets_inside_cells(mode):
     v = airborne()
     pl = MotionPlanner(v, radius=1.4 * v.min_turn_radius, arrival_heading=math.pi / 2,

@@ -17,6 +17,7 @@ from iterplan_compiler.cli import main
 from iterplan_compiler.runtime.executor import Executor, RunConfig
 from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.mapfile import load_map
+from iterplan_compiler.runtime.planner import PlannerMode
 from iterplan_compiler.runtime.sim import SimVehicle
 from iterplan_compiler.view import missing_dependency
 from iterplan_compiler.view.snapshot import Hub, Observer, map_message
@@ -319,8 +320,9 @@ def test_observer_on_a_mavlink_vehicle():
     try:
         v = MavlinkVehicle.connect(url, grid.frame, FAST)
         try:
-            r = Executor(TABLE, grid, v, config=RunConfig(planner_mode="carrot", max_wall=120,
-                                                          observe=Observer(hub, rate=20))).run()
+            cfg = RunConfig(planner_mode=PlannerMode.CARROT, max_wall=120,
+                            observe=Observer(hub, rate=20))
+            r = Executor(TABLE, grid, v, config=cfg).run()
         finally:
             v.close()
     finally:
