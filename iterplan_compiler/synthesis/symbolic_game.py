@@ -340,24 +340,35 @@ class SymbolicGame:
                            for g in self.groups if g.controllable == controllable])
 
     def restrict(self, care: Node) -> None:
-        """Restrict the framed relations to ``care`` (e.g. the reachable states) at both
-        ends.
+        """Restrict the relations to ``care`` (e.g. the reachable states) at both ends: a
+        framed group to ``care`` itself, a partitioned group to ``care``'s projection on its
+        owners' variables.
 
-        Only sound for a forward-closed ``care``: then no relevant edge is lost.  Measured on
+        Only sound for a forward-closed ``care``: then no relevant edge is lost — for a
+        partitioned group, a state ``s`` of ``care`` satisfies the projection and so does
+        each of its successors (they are in ``care`` too), so every image and preimage read
+        on ``care`` is unchanged.  Measured on
         GyroLTLVar3_702 (31 k reachable states, 68 k-node framed controllable relation): the
         fixpoint took 60 s unrestricted and 8 s restricted — the relational products then
-        never touch unreachable junk.  Partitioned groups (which do not mention every
-        variable) stay as they are.  With :data:`KEEP_SMALLER_RELATION` a restriction that
+        never touch unreachable junk.  With :data:`KEEP_SMALLER_RELATION` a restriction that
         *grows* the relation is not kept (either relation is exact on ``care``): with
         recoded machines GyroLTL_637's framed uncontrollable relation has 16.8 k nodes and
         51 k restricted, and its first 35 CPre took 42.6 s CPU instead of 47.1 s; neutral on
-        GyroLTLVar3_702 and GyroLTL_486/_588/_590."""
+        GyroLTLVar3_702 and GyroLTL_486/_588/_590.  The projection (0.2 s) shrinks
+        GyroLTL_637's 28-owner ``tick`` group from 206 k to 61 k nodes (the small groups
+        would grow and are kept as they are); its fixpoint then computes 8 % fewer CUDD
+        cache insertions (30.8 M → 28.4 M) and peaks at 1.19 M instead of 1.29 M live
+        nodes, same iterates — small, since the iterates dominate (docs/synthesis.md)."""
+        b = self.bdd
         cn = self.to_next(care)
         for g in self.groups:
             if len(g.owners) == len(self.cur):
                 r = g.rel & care & cn
-                if len(r) <= len(g.rel) or not KEEP_SMALLER_RELATION:
-                    g.rel = r
+            else:
+                p = b.exist(self.cur_vars - g.cur_vars, care)
+                r = g.rel & p & b.let(g.prime, p)
+            if len(r) <= len(g.rel) or not KEEP_SMALLER_RELATION:
+                g.rel = r
 
     def post(self, X: Node) -> Node:
         b = self.bdd

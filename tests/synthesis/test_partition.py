@@ -1,13 +1,17 @@
 """The partitioned relation (synthesis/partition.py): merging the groups of one
 controllability into a framed relation (``cluster``) keeps the relation, shared fluent
-variables included."""
+variables included; restricting the groups to the reachable states keeps the game there."""
 
 from __future__ import annotations
+
+from unittest.mock import patch
 
 from hypothesis import HealthCheck, given, settings
 from test_agreement import problems
 
+from iterplan_compiler.synthesis import symbolic_game
 from iterplan_compiler.synthesis.encode import prepare
+from iterplan_compiler.synthesis.fixpoint import gr1_winning
 from iterplan_compiler.synthesis.partition import cluster, framed_to, is_framed, owner_groups
 from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
@@ -37,3 +41,29 @@ def test_cluster_keeps_the_relation(prob):
             if sum(grp.controllable == c for grp in parts) > 1:
                 framed = [grp for grp in merged if grp.controllable == c]
                 assert len(framed) == 1 and is_framed(g.vars, framed[0])
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_restrict_keeps_the_game_on_the_reachable_states(prob):
+    """``SymbolicGame.restrict(reach)``: a partitioned group restricted to the projection of
+    ``reach`` on its owners (and a framed one to ``reach``) has the same moves from every
+    reachable state, and the fixpoint the same winning region and iteration counts.  The
+    groups are kept partitioned (``CLUSTER_MAX_NODES = 0``) and every restriction is kept,
+    so the projection is exercised even where it would not shrink the relation."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        with patch.object(symbolic_game, "CLUSTER_MAX_NODES", 0), \
+                patch.object(symbolic_game, "KEEP_SMALLER_RELATION", False):
+            g = SymbolicGame(spec)
+            reach = g.reachable()
+            goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
+            care = reach & g.live
+            before = [_relation(g, g.groups, c) & reach for c in (True, False)]
+            plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care,
+                                cpre_lost=g.cpre_lost, cpre_gained=g.cpre_gained)
+            g.restrict(reach)
+            assert [_relation(g, g.groups, c) & reach for c in (True, False)] == before
+            fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care,
+                               cpre_lost=g.cpre_lost, cpre_gained=g.cpre_gained)
+            assert fast.winning & care == plain.winning & care
+            assert fast.iterations == plain.iterations
