@@ -162,7 +162,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
         return _solve_nonblocking(g, care, stats, explain, name, t, say, started)
     goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
     fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live,
-                     must_contain=g.init, progress=say, cpre_lost=g.cpre_lost,
+                     must_contain=g.init, progress=say, cpre_lost=g.cpre_lost_chained,
                      cpre_gained=g.cpre_gained)
     W = fp.winning & care
     stats["t_solve"] = time.perf_counter() - t

@@ -305,14 +305,32 @@ class SymbolicGame:
         with one in ``removed`` (``cand``) need the check "some controllable successor in
         ``X``", which looks at successors of ``cand`` only — hence ``X`` may be replaced by
         its generalised cofactor on them (smaller, equal where it is read)."""
-        b = self.bdd
         env_lost = within & self.env & self._pre_of(False, removed)
+        return env_lost | self._ctrl_lost(X, removed, within)
+
+    def _ctrl_lost(self, X: Node, removed: Node, within: Node) -> Node:
+        """The controller states of :meth:`cpre_lost`."""
+        b = self.bdd
         cand = within & self.ctrl_owned & self._pre_of(True, removed)
         if cand == b.false:
-            return env_lost
+            return b.false
         succ = self._post_of(True, cand)
         keep = cand & self._pre_of(True, cofactor(b, X & self.live, succ))
-        return env_lost | (cand & ~keep)
+        return cand & ~keep
+
+    def cpre_lost_chained(self, X: Node, removed: Node, within: Node) -> Node:
+        """:meth:`cpre_lost` in Gauss–Seidel order, for a descending ``νX``: the environment
+        states lost (``E``, outside ``CPre(X)``) are removed before the controller states
+        are checked, against ``X ∖ E`` with ``removed ∪ E``.  A superset of
+        ``within ∖ CPre(X)`` (``E`` ∪ the controller states of ``within ∖ CPre(X ∖ E)``),
+        and still disjoint from every fixpoint below ``X``: ``E`` is, so such a fixpoint
+        lies in ``X ∖ E``, and a controller state without a controllable successor there is
+        outside its CPre.  The νX then reaches the same fixpoint in
+        fewer steps (a step removing nothing is still a fixpoint).  GyroLTL_637's fixpoint:
+        638 → 620 νX steps, CUDD cache insertions 28.4 M → 25.6 M (−10 %), peak live nodes
+        1.19 M → 0.99 M (docs/synthesis.md)."""
+        env_lost = within & self.env & self._pre_of(False, removed)
+        return env_lost | self._ctrl_lost(X & ~env_lost, removed | env_lost, within)
 
     def cpre_gained(self, X: Node, added: Node, within: Node) -> Node:
         """States of ``within`` in ``CPre(X ∪ added)``, at least those outside ``CPre(X)``

@@ -41,6 +41,41 @@ def test_cpre_lost_is_the_difference_of_cpres(prob):
             assert got == within & ~g.cpre(X)
 
 
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_chained_cpre_lost_removes_the_env_states_first(prob):
+    """``cpre_lost_chained(X, D, W) = E ∪ (W ∩ ctrl ∖ CPre(X ∖ E))``, ``E = W ∩ env ∖ CPre(X)``."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        reach = g.reachable() & g.live
+        rng = random.Random(1)
+        for _ in range(4):
+            old = _random_subset(g, reach, rng)
+            X = _random_subset(g, old, rng)
+            within = _random_subset(g, g.cpre(old) & reach, rng)
+            E = within & g.env & ~g.cpre(X)
+            got = g.cpre_lost_chained(X, old & ~X, within)
+            assert got == E | (within & g.ctrl_owned & ~g.cpre(X & ~E))
+            assert within & ~g.cpre(X) <= got  # at least what cpre_lost removes
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_chained_frontier_keeps_the_winning_region(prob):
+    """The Gauss–Seidel frontier νX (game.py's default) reaches the same fixpoints."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        reach = g.reachable() & g.live
+        goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
+        plain = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach)
+        for ratio in (1, 8):
+            fast = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=reach,
+                               cpre_lost=g.cpre_lost_chained, cpre_gained=g.cpre_gained,
+                               frontier_ratio=ratio)
+            assert fast.winning == plain.winning
+            assert fast.iterations["x"] <= plain.iterations["x"]
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems())
 def test_frontier_keeps_the_winning_region(prob):
