@@ -68,6 +68,10 @@ Optimisations (each sound by monotonicity of the operators; switches in
   νX (``|X|`` ≈ 90 k nodes): with ``|X|/|D|`` = 1.0–2.4 a frontier step cost 1.8–3.7× a
   full one, at 3.6 0.8×, from 14 up 0.3× to 0.05× (the long tail of small ``D``), hence 4;
   the νX went from 26 full CPre (~35 s) to 7 full CPre and a frontier tail (~10 s).
+  ``cpre_lost`` may remove more than ``X_k ∖ CPre(X_k)``, as long as it removes nothing of a
+  fixpoint below ``X_k`` (Gauss–Seidel: ``SymbolicGame.cpre_lost_chained``); each iterate
+  then still lies above the greatest fixpoint and below the plain one, and a step that
+  removes nothing is a fixpoint.
 * *frontier μY* (same predecessor) — the dual: in the chained ``μY``, ``Y`` only grows,
   and ``CPre`` is monotone, so ``CPre(Y ∪ ΔY) = CPre(Y) ∪ cpre_gained(Y, ΔY)``, where a
   state can enter only if one of its successors is in ``ΔY`` (a controller state: a

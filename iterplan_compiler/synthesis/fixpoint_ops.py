@@ -57,7 +57,10 @@ class FrontierPredecessor(Predecessor, Protocol):
 
     def cpre_lost(self, states: Node, removed: Node, within: Node) -> Node:
         """The states of ``within`` (a subset of ``CPre(states ∪ removed)``) that are not in
-        ``CPre(states)``."""
+        ``CPre(states)`` — or a superset of them inside ``within`` that is disjoint from
+        every fixpoint of the νX below ``states`` (a Gauss–Seidel update such as
+        ``SymbolicGame.cpre_lost_chained``: the νX then reaches the same value in fewer
+        steps)."""
         ...
 
     def cpre_gained(self, states: Node, added: Node, within: Node) -> Node:
