@@ -86,15 +86,25 @@ def commands(res: dict) -> list[tuple[float, str]]:
 def loiter_over(samples: list, centre: tuple[float, float], radius: float,
                 mode: str = "GUIDED") -> tuple[bool, str]:
     """Did the aircraft (observer samples t, mode, armed, x, y, alt) end up circling ``centre``
-    in ``mode``?  Judged on the last 20 s of samples."""
+    in ``mode``?  Judged on the last 20 s of samples, which must really cover 20 s (at the
+    observer's 4 Hz, at least 40 samples): a link that delivered one or a few stale samples
+    fails here with what it saw instead of being judged on them."""
     if not samples:
         return False, "no samples"
     t_end = samples[-1][0]
     tail = [s for s in samples if s[0] >= t_end - 20]
+    if t_end - samples[0][0] < 20 or len(tail) < 40:
+        return False, (f"observer samples cover only {t_end - samples[0][0]:.1f} s "
+                       f"({len(samples)} samples, {len(tail)} in the last 20 s)")
     modes = {s[1] for s in tail}
     d = [math.hypot(s[3] - centre[0], s[4] - centre[1]) for s in tail]
     ok = modes == {mode} and all(s[2] for s in tail) and max(d) < 2.0 * radius + 60
     return ok, f"modes {modes}, distance to centre {min(d):.0f}-{max(d):.0f} m"
+
+
+def fault_injected(res: dict) -> bool:
+    """The scenario's fault was injected mid-mission (else the fault tests judge nothing)."""
+    return res.get("fault_t") is not None and "fault_missed" not in res
 
 
 def log_events(res: dict, grid: Any) -> list:

@@ -1,12 +1,14 @@
 """Faults against real ArduPlane SITL, each asserting the outcome: a pilot's mode change, link
 loss (SITL killed), GPS loss (SIM_GPS_DISABLE), Ctrl-C, and a vehicle that never gets ready."""
 
-from tests.sitl.harness import commands, describe, loiter_over, run_scenario
+from tests.sitl.harness import commands, describe, fault_injected, loiter_over, run_scenario
 
 
 def scenario(controllers, tmp_path, fault, **kw):
     ctl, mp = controllers["fire_patrol"]
-    return run_scenario(tmp_path, controller=ctl, map=mp, fault=fault, **kw)
+    res = run_scenario(tmp_path, controller=ctl, map=mp, fault=fault, **kw)
+    assert fault_injected(res), res.get("fault_missed", "no fault_t") + "\n" + describe(res)
+    return res
 
 
 def test_pilot_switches_to_rtl(controllers, tmp_path):
@@ -44,6 +46,7 @@ def test_gps_loss_mid_mission(controllers, tmp_path):
 
 def test_ctrl_c_mid_mission(controllers, tmp_path):
     res = scenario(controllers, tmp_path, "sigint", fault_after=30)
+    assert res["iterc_ignores_sigint"] is False, "iterc was started with SIGINT ignored"
     s = res["summary"]
     assert res["rc"] == 1 and s["reason"] == "interrupted", describe(res)
     assert s["safe_state"] == "loiter commanded; vehicle in GUIDED", describe(res)
@@ -63,4 +66,4 @@ def test_vehicle_never_ready(controllers, tmp_path):
     assert res["rc"] == 1, describe(res)
     assert "vehicle not ready after 15 s" in res["stdout"] + res["stderr"], describe(res)
     assert "3-D GPS fix" in res["stderr"]
-    assert not any(a[2] for a in res["after"])          # never armed
+    assert res["after"] and not any(a[2] for a in res["after"])          # never armed
