@@ -113,8 +113,23 @@ class MavlinkLink:
         raise MavlinkError(f"no autopilot heartbeat on {url} within "
                            f"{self.cfg.heartbeat_timeout:.0f} s")
 
-    def close(self) -> None:
+    def close(self, drain_s: float = 2.0) -> None:
+        """Stop the heartbeat, read what the autopilot has already sent (at most ``drain_s``
+        wall seconds), then close.  Closing a TCP socket with unread data sends a reset
+        instead of an orderly close; ArduPilot SITL's SERIAL0 then stops its simulation for
+        good (measured: after 6 s unread at speed-up 10, a plain close froze SITL's clock,
+        a drained close of 4,390 queued messages in 0.09 s did not; tests/sitl)."""
         self._stop.set()
+        # Only a pymavlink connection owns a socket to drain (``recv_msg``); MAVProxy's
+        # ModuleLink reads nothing of its own.
+        recv_msg = getattr(self.conn, "recv_msg", None)
+        try:
+            deadline = time.monotonic() + drain_s
+            while recv_msg is not None and time.monotonic() < deadline \
+                    and recv_msg() is not None:
+                pass
+        except Exception:  # noqa: BLE001 - a dead link has nothing left to read
+            pass
         try:
             self.conn.close()
         except Exception:  # noqa: BLE001 - closing a dead link must not fail a mission report

@@ -344,3 +344,34 @@ def test_land_uploads_a_landing_mission_and_reports_landed(link):
     e = wait_for(v, "landed", 400)
     assert "disarmed" in e.detail or "on the ground" in e.detail
     assert not [x for x in v.poll_events() if x.kind in ("mode_changed", "disarmed")]
+
+
+def test_close_reads_what_is_queued_first():
+    """A TCP close with unread data is a reset, which froze SITL (MavlinkLink.close)."""
+    from iterplan_compiler.runtime.mavlink_link import MavlinkLink
+
+    class Conn:
+        def __init__(self):
+            self.queued, self.closed_with = 5, None
+
+        def recv_msg(self):
+            if self.queued == 0:
+                return None
+            self.queued -= 1
+            return object()
+
+        def close(self):
+            self.closed_with = self.queued
+
+    conn = Conn()
+    MavlinkLink(conn).close()
+    assert conn.closed_with == 0
+
+    class Endless(Conn):
+        def recv_msg(self):
+            return object()
+
+    slow = Endless()
+    t0 = time.monotonic()
+    MavlinkLink(slow).close(drain_s=0.2)
+    assert slow.closed_with is not None and time.monotonic() - t0 < 1.0
