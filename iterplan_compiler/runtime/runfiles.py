@@ -101,19 +101,24 @@ def _finite(text: str, low: float, strict: bool) -> float:
 
 @contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM raises KeyboardInterrupt (like Ctrl-C) inside the block: a mission then ends in
-    its safe state with its outputs instead of being killed."""
+    """SIGTERM and SIGINT raise KeyboardInterrupt inside the block: a mission then ends in its
+    safe state with its outputs instead of being killed.  SIGINT is set here too, because a
+    process started in the background by a non-interactive shell inherits it *ignored* (and
+    Python then installs no Ctrl-C handler): a mission must stay interruptible however it was
+    started."""
     def handler(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt(f"signal {signum}")
     try:
-        old: Any = signal.signal(signal.SIGTERM, handler)
+        old: dict[int, Any] = {s: signal.signal(s, handler)
+                               for s in (signal.SIGTERM, signal.SIGINT)}
     except ValueError:          # not the main thread (an embedding application)
         yield
         return
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def parse_until(text: str) -> tuple[str, int] | None:
