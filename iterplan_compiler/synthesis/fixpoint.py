@@ -286,7 +286,7 @@ def _mu_y(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycle: bool,
         limits.check_deadline()
         stats["y"] += 1
         base = op.base(goal, Y, Z)
-        xs = [_nu_x(bdd, op, base, not_a[i],
+        xs = [nu_x(bdd, op, base, not_a[i],
                     _start(op, s, len(layers), i, Z, base, recycle), stats)
               for i in range(len(not_a))]
         y_new = bdd.false
@@ -316,7 +316,7 @@ def _mu_y_chained(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycl
         xs: list[Node] = []
         x_rounds.append(xs)
         for i in range(len(not_a)):
-            X = _nu_x(bdd, op, base, not_a[i],
+            X = nu_x(bdd, op, base, not_a[i],
                       _start(op, s, len(x_rounds) - 1, i, Z, base, recycle), stats)
             xs.append(X)
             y_new = (Y | X) & Z
@@ -332,13 +332,16 @@ def _mu_y_chained(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycl
                 return x_rounds, Y
 
 
-def _nu_x(bdd: Any, op: Op, base: Node, not_a: Node, start: Node,
-          stats: dict[str, int]) -> Node:
+def nu_x(bdd: Any, op: Op, base: Node, not_a: Node, start: Node,
+         stats: dict[str, int] | None = None) -> Node:
     """``νX. step(X)`` from ``start`` (an over-approximation), descending inside ``start``.
 
     ``X_{k+1} = step(X_k) ∧ start ⊆ X_k`` by monotonicity, so the first repetition (or
     ``∅``) is the fixpoint; for ``¬A_i = ∅`` the step ignores ``X``: one evaluation.
+    ``stats["x"]`` counts the steps.  Also the νX of MTSA's rank layers
+    (``symbolic_strategy.rank_layers``).
     """
+    stats = {"x": 0} if stats is None else stats
     stats["x"] += 1
     X = op.x_step(base, not_a, start) & start
     if not_a == bdd.false:

@@ -49,7 +49,8 @@ from typing import Any
 
 from iterplan_compiler import limits
 from iterplan_compiler.ir.lts import LTS, make_lts
-from iterplan_compiler.synthesis.fixpoint import EngineOptions
+from iterplan_compiler.synthesis.fixpoint import EngineOptions, nu_x
+from iterplan_compiler.synthesis.fixpoint_ops import CallableFrontierPre, StateOp
 from iterplan_compiler.synthesis.strategy import PERMISSIVE_PREFIX, StrategyKind
 from iterplan_compiler.synthesis.symbolic_eval import CachedMoves, CompiledSets, RankTable
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
@@ -89,18 +90,10 @@ def rank_layers(g: SymbolicGame, W: Node, goal: Node, A: list[Node], *,
 
 
 def _nu_x(g: SymbolicGame, below: Node, step: Node, W: Node, ratio: int) -> Node:
-    """``νX. below ∪ (step ∩ CPre(X))`` from ``W`` (``below, step ⊆ W``)."""
-    X = W
-    last = None  # the previous iterate, once X = one step from it
-    while True:
-        limits.check_deadline()
-        if last is not None and ratio and len(last & ~X) * ratio < len(X):
-            x_new = X & ~g.cpre_lost(X, last & ~X, X & ~below)
-        else:
-            x_new = below | (step & g.cpre(X))
-        if x_new == X:
-            return X
-        last, X = X, x_new
+    """``νX. below ∪ (step ∩ CPre(X))`` from ``W`` (``below, step ⊆ W``): the fixpoint
+    engine's νX (:func:`fixpoint.nu_x`) with its frontier step (exact ``cpre_lost``)."""
+    frontier = CallableFrontierPre(g.cpre, g.cpre_lost) if ratio else None
+    return nu_x(g.bdd, StateOp(g.bdd, g.cpre, frontier, ratio), below, step, W)
 
 
 class _Oracle:
