@@ -15,7 +15,6 @@ from iterplan_compiler.runtime.planner import (
     HeadingChoice,
     MotionPlanner,
     PlannerMode,
-    shortest_csc,
 )
 from iterplan_compiler.runtime.shadow import Prediction, Shadow
 from iterplan_compiler.runtime.sorter import Pose, SorterKind
@@ -184,8 +183,7 @@ class MissionContext:
         """The arrival pose at ``cell`` flying from ``pose`` by the shortest admissible path
         (the shadow's model of a leg)."""
         x, y = self.grid.centre(cell)
-        path = min((shortest_csc(pose, x, y, h, self.planner.radius)
-                    for h in self.planner.admissible), key=lambda d: d.length)
+        path = self.planner.path_to(pose, x, y, self.planner.admissible)
         return Pose(x, y, path.end_heading)
 
     def current_cell(self) -> int | None:

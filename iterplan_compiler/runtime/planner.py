@@ -218,11 +218,13 @@ class MotionPlanner:
         self.last_cmd: tuple[str, float, float] | None = None
 
     # -- planning -----------------------------------------------------------------------------
-    def path_to(self, start: Pose, x: float, y: float) -> DubinsPath:
+    def path_to(self, start: Pose, x: float, y: float,
+                headings: Sequence[float] | None = None) -> DubinsPath:
         """Shortest admissible path (the first of equally long ones: the arrival heading
-        before its opposite)."""
+        before its opposite); ``headings``: the arrival headings to choose from (default: the
+        current leg's, which a fixed heading may narrow)."""
         best: DubinsPath | None = None
-        for h in self._headings():
+        for h in (self._headings() if headings is None else headings):
             cand = shortest_csc(start, x, y, h, self.radius)
             if best is None or cand.length < best.length - 1e-9:
                 best = cand
