@@ -25,13 +25,15 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 DEFAULT = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "syntech15"
 _STARTED = time.perf_counter()
 
 
-def run_one(path: str, composite: str) -> dict:
-    """Synthesise ``composite`` of ``path`` in this process; the result as a dict."""
+def load_problem(path: str, composite: str) -> tuple[Any, list[str]]:
+    """The synthesis problem ``composite`` of ``path`` from this checkout, with the
+    interactive limits lifted, or ``(None, why)``.  Also used by ``synth_phases.py``."""
     import warnings
 
     warnings.simplefilter("ignore")
@@ -39,7 +41,6 @@ def run_one(path: str, composite: str) -> dict:
     from iterplan_compiler import limits
     from iterplan_compiler.diagnostics import has_errors
     from iterplan_compiler.pipeline import load_model_with_sources as load_with_sources
-    from iterplan_compiler.synthesis.driver import synthesize
 
     # the translated specs exceed the interactive defaults (GyroLTLVar2_701's G5 has 13
     # temporal subformulas, over --max-temporal-ops 10): a benchmark measures the engine,
@@ -47,10 +48,19 @@ def run_one(path: str, composite: str) -> dict:
     limits.set_limits(max_temporal_ops=24, max_states=50_000_000, max_memory_mb=16_000)
     model, diags, _ = load_with_sources(path)
     if model is None or has_errors(diags):
-        return {"verdict": "error"}
+        return None, [str(d) for d in diags][:2]
     problem, pdiags = model.synthesis_problem(composite)
     if problem is None or has_errors(pdiags):
-        return {"verdict": "error", "why": [str(d) for d in pdiags][:2]}
+        return None, [str(d) for d in pdiags][:2]
+    return problem, []
+
+
+def run_one(path: str, composite: str) -> dict:
+    """Synthesise ``composite`` of ``path`` in this process; the result as a dict."""
+    problem, why = load_problem(path, composite)
+    if problem is None:
+        return {"verdict": "error", "why": why}
+    from iterplan_compiler.synthesis.driver import synthesize
 
     def progress(msg: str) -> None:
         if msg.startswith("verdict:"):  # the fixpoint decided: tell the parent at once

@@ -79,18 +79,12 @@ def run_one(path: str, composite: str) -> dict[str, Any]:
     import warnings
 
     warnings.simplefilter("ignore")
-    from iterplan_compiler import limits
-    from iterplan_compiler.diagnostics import has_errors
-    from iterplan_compiler.pipeline import load_model_with_sources as load_with_sources
+    from benchmarks.syntech15_bench import load_problem
     from iterplan_compiler.synthesis.driver import synthesize
 
-    limits.set_limits(max_temporal_ops=24, max_states=50_000_000, max_memory_mb=16_000)
-    model, diags, _ = load_with_sources(path)
-    if model is None or has_errors(diags):
-        return {"verdict": "error"}
-    problem, pdiags = model.synthesis_problem(composite)
-    if problem is None or has_errors(pdiags):
-        return {"verdict": "error"}
+    problem, why = load_problem(path, composite)
+    if problem is None:
+        return {"verdict": "error", "why": why}
     clock = _Clock()
     _instrument(clock)
     t = time.process_time()
