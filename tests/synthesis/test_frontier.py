@@ -25,38 +25,37 @@ def _random_subset(g, u, rng):
     return out
 
 
+def _shrunk_sets(prob, seed):
+    """Per encoding of ``prob`` (plain and recoded), 4 random ``(g, old, X ⊆ old, within ⊆
+    CPre(old))`` of reachable states: a νX step that shrank ``old`` to ``X``."""
+    for spec in (prepare(prob), recode_leaves(prepare(prob))):
+        g = SymbolicGame(spec)
+        reach = g.reachable() & g.live
+        rng = random.Random(seed)
+        for _ in range(4):
+            old = _random_subset(g, reach, rng)
+            X = _random_subset(g, old, rng)
+            yield g, old, X, _random_subset(g, g.cpre(old) & reach, rng)
+
+
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems())
 def test_cpre_lost_is_the_difference_of_cpres(prob):
     """``cpre_lost(X, D, W) = W \\ CPre(X)`` for every ``W ⊆ CPre(X ∪ D)``."""
-    for spec in (prepare(prob), recode_leaves(prepare(prob))):
-        g = SymbolicGame(spec)
-        reach = g.reachable() & g.live
-        rng = random.Random(0)
-        for _ in range(4):
-            old = _random_subset(g, reach, rng)
-            X = _random_subset(g, old, rng)
-            within = _random_subset(g, g.cpre(old) & reach, rng)
-            got = g.cpre_lost(X, old & ~X, within)
-            assert got == within & ~g.cpre(X)
+    for g, old, X, within in _shrunk_sets(prob, seed=0):
+        got = g.cpre_lost(X, old & ~X, within)
+        assert got == within & ~g.cpre(X)
 
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems())
 def test_chained_cpre_lost_removes_the_env_states_first(prob):
     """``cpre_lost_chained(X, D, W) = E ∪ (W ∩ ctrl ∖ CPre(X ∖ E))``, ``E = W ∩ env ∖ CPre(X)``."""
-    for spec in (prepare(prob), recode_leaves(prepare(prob))):
-        g = SymbolicGame(spec)
-        reach = g.reachable() & g.live
-        rng = random.Random(1)
-        for _ in range(4):
-            old = _random_subset(g, reach, rng)
-            X = _random_subset(g, old, rng)
-            within = _random_subset(g, g.cpre(old) & reach, rng)
-            E = within & g.env & ~g.cpre(X)
-            got = g.cpre_lost_chained(X, old & ~X, within)
-            assert got == E | (within & g.ctrl_owned & ~g.cpre(X & ~E))
-            assert within & ~g.cpre(X) <= got  # at least what cpre_lost removes
+    for g, old, X, within in _shrunk_sets(prob, seed=1):
+        E = within & g.env & ~g.cpre(X)
+        got = g.cpre_lost_chained(X, old & ~X, within)
+        assert got == E | (within & g.ctrl_owned & ~g.cpre(X & ~E))
+        assert within & ~g.cpre(X) <= got  # at least what cpre_lost removes
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
