@@ -9,7 +9,6 @@ explain (:mod:`explain`).
 
 from __future__ import annotations
 
-import enum
 import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, fields
@@ -27,6 +26,7 @@ from iterplan_compiler.synthesis.encode import (
     SynthesisError,
     prepare,
 )
+from iterplan_compiler.synthesis.options import Solver, VariableOrder
 from iterplan_compiler.synthesis.strategy import (
     StrategyKind,
     extract_controller,
@@ -36,31 +36,6 @@ from iterplan_compiler.synthesis.strategy import (
 
 __all__ = ["Solver", "StrategyKind", "SynthesisResult", "SynthesisStats", "VariableOrder",
            "check_compatibility", "plant_product", "strategy_kind", "synthesize"]
-
-
-class _StrEnum(str, enum.Enum):
-    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
-
-    def __str__(self) -> str:
-        return str(self.value)
-
-    def __format__(self, spec: str) -> str:
-        return format(str(self.value), spec)
-
-class Solver(_StrEnum):
-    """Which GR(1) solver :func:`synthesize` runs (both give the same verdict and controller)."""
-
-    SYMBOLIC = "symbolic"  # BDD fixpoint (default)
-    EXPLICIT = "explicit"  # MTSA's explicit rank solver
-
-
-class VariableOrder(_StrEnum):
-    """BDD variable orders of the symbolic solver (see :mod:`game`)."""
-
-    CLUSTERED = "clustered"
-    ACTION_FIRST = "action_first"
-    ACTION_LAST = "action_last"
-    BLOCKED = "blocked"
 
 
 SOLVERS = tuple(s.value for s in Solver)
@@ -96,7 +71,7 @@ class SynthesisStats(Mapping[str, object]):
     fixpoint_iterations: int | None = None
     verdict_at: float | None = None  # seconds from the start until the fixpoint decided
     bdd_backend: str | None = None
-    order: str | None = None
+    order: VariableOrder | None = None
     times: tuple[tuple[str, float], ...] = ()
     extra: tuple[tuple[str, object], ...] = ()
 
@@ -180,7 +155,8 @@ def synthesize(
 
     ``solver`` — ``"symbolic"`` (BDD, default) or ``"explicit"`` (MTSA's rank solver);
     both give the same verdict and the same controller.  ``order`` selects the symbolic
-    variable order (see :mod:`game`).  Stats keys: ``game_states``, ``plant_states``
+    variable order (:class:`VariableOrder`, see :mod:`symbolic_game`).  Both are converted
+    to their enums here; the stages below take the enums only.  Stats keys: ``game_states``, ``plant_states``
     (explicit) / ``bdd_nodes`` (symbolic), ``controller_states``, ``t_<phase>`` seconds.
     """
     if solver not in SOLVERS:
@@ -231,7 +207,7 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
             from iterplan_compiler.synthesis.game import solve_symbolic
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
-                                    order=order.value, permissive=problem.permissive,
+                                    order=order, permissive=problem.permissive,
                                     started=t0, kind=kind)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
@@ -349,7 +325,7 @@ def check_compatibility(problem: SynthesisProblem, *, solver: Solver | str = Sol
                 controllable=problem.controllable | faults, guarantees=(Const(False),),
                 failures=())
     spec = prepare(p, mode="gr1")
-    if solver == "explicit":
+    if Solver(solver) is Solver.EXPLICIT:
         game = _explicit.build_game(spec)
         winning = bool(_explicit.winning_region(game))
     else:

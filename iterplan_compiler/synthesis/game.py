@@ -19,12 +19,13 @@ from iterplan_compiler.ir.lts import ERROR, LTS
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
+from iterplan_compiler.synthesis.options import VariableOrder
 from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
-from iterplan_compiler.synthesis.symbolic_game import ORDERS, SymbolicGame, quotient_leaves
+from iterplan_compiler.synthesis.symbolic_game import SymbolicGame, quotient_leaves
 from iterplan_compiler.synthesis.symbolic_strategy import extract_gr1_strategy
 
-__all__ = ["ORDERS", "SymbolicGame", "nonblocking_symbolic", "solve_symbolic", "subgame"]
+__all__ = ["SymbolicGame", "VariableOrder", "nonblocking_symbolic", "solve_symbolic", "subgame"]
 
 #: reachability is abandoned (the fixpoint then runs over all valid states) once the reached
 #: set's BDD grows past this many nodes — see :meth:`SymbolicGame.reachable`
@@ -114,7 +115,8 @@ def nonblocking_symbolic(g: SymbolicGame, care: Any, marked: Any) -> Any:
 
 
 def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None], *,
-                   explain: bool, name: str, order: str = "clustered",
+                   explain: bool, name: str,
+                   order: VariableOrder = VariableOrder.CLUSTERED,
                    permissive: bool = False, quotient: bool = True,
                    started: float | None = None,
                    kind: StrategyKind = StrategyKind.PERMISSIVE
@@ -140,7 +142,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
             stats["body_quotient_states"] = [c.num_states
                                              for c in qspec.components[:_nbody(spec)]]
-        if order == "clustered":
+        if order is VariableOrder.CLUSTERED:
             # fluent-aligned codes, shared fluent variables (recode.py): the same game
             qspec = recode_leaves(qspec)
         if qspec is not spec:
@@ -189,7 +191,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     return True, ctrl, ""
 
 
-def _game_and_reach(spec: GameSpec, order: str, stats: dict[str, Any],
+def _game_and_reach(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
                     say: Callable[[str], None], t: float) -> tuple[SymbolicGame, Any]:
     """Encode the game, build its reachable set (None: abandoned at
     :data:`REACH_MAX_NODES`) and restrict the framed relations to it."""

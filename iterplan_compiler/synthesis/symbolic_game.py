@@ -27,11 +27,12 @@ Game (§3.3): ``Env(s) = ∨_{g unc} ∃s'. R_g``;
 ``CPre(X) = (Env ∧ ¬∨_{g unc} ∃s'. R_g ∧ ¬X') ∨ (¬Env ∧ ∨_{g ctrl} ∃s'. R_g ∧ X')``
 restricted to ``live``; dead ends satisfy neither disjunct, so they lose.
 
-Variable orders (``order``): ``"clustered"`` (default: each body component's bits with
-current/next interleaved, each fluent monitor's bit right after the smallest component sharing
-most actions with it), ``"action_first"`` (the same without moving fluents: they come last —
-the name is historical, there are no action bits any more), ``"action_last"`` (= action_first)
-and ``"blocked"`` (all current bits, then all next bits; the textbook bad order).
+Variable orders (``order``, a :class:`options.VariableOrder`): ``CLUSTERED`` (default: each
+body component's bits with current/next interleaved, each fluent monitor's bit right after the
+smallest component sharing most actions with it), ``ACTION_FIRST`` (the same without moving
+fluents: they come last — the name is historical, there are no action bits any more),
+``ACTION_LAST`` (= action_first) and ``BLOCKED`` (all current bits, then all next bits; the
+textbook bad order).
 """
 
 from __future__ import annotations
@@ -52,10 +53,10 @@ from iterplan_compiler.symbolic.bdd import (
     value_cubes,
 )
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
+from iterplan_compiler.synthesis.options import VariableOrder
 from iterplan_compiler.synthesis.partition import Group, Vars, cluster, owner_groups
 from iterplan_compiler.synthesis.recode import ERROR_BIT
 
-ORDERS = ("action_first", "clustered", "action_last", "blocked")
 #: see :func:`partition.cluster`
 CLUSTER_MAX_NODES = 250_000
 #: see :meth:`SymbolicGame.restrict`
@@ -107,9 +108,10 @@ def quotient_leaves(spec: GameSpec) -> GameSpec:
 class SymbolicGame:
     """Partitioned BDD encoding of a :class:`GameSpec` (see the module docstring)."""
 
-    def __init__(self, spec: GameSpec, *, bdd: Any = None, order: str = "clustered") -> None:
-        if order not in ORDERS:
-            raise ValueError(f"unknown order {order!r}")
+    def __init__(self, spec: GameSpec, *, bdd: Any = None,
+                 order: VariableOrder = VariableOrder.CLUSTERED) -> None:
+        if not isinstance(order, VariableOrder):
+            raise TypeError(f"order must be a VariableOrder, not {order!r}")
         self.spec = spec
         self.bdd = bdd if bdd is not None else new_manager()
         comps = spec.components
@@ -129,13 +131,13 @@ class SymbolicGame:
 
     # -- variables ----------------------------------------------------------------------
 
-    def _declare(self, order: str) -> None:
+    def _declare(self, order: VariableOrder) -> None:
         b = self.bdd
         comps = self.spec.components
         widths = [bits_for(c.num_states + (1 if c.has_error else 0)) for c in comps]
         self.cur: list[BitVec] = []
         self.nxt: list[BitVec] = []
-        if order == "blocked":
+        if order is VariableOrder.BLOCKED:
             cur_names = [tuple(f"s{k}_{i}" for i in range(w)) for k, w in enumerate(widths)]
             nxt_names = [tuple(f"s{k}_{i}'" for i in range(w)) for k, w in enumerate(widths)]
             for names in (*cur_names, *nxt_names):
@@ -143,7 +145,7 @@ class SymbolicGame:
             self.cur = [BitVec(n) for n in cur_names]
             self.nxt = [BitVec(n) for n in nxt_names]
             return
-        if self.spec.bit_keys and order == "clustered":
+        if self.spec.bit_keys and order is VariableOrder.CLUSTERED:
             self._declare_by_keys(widths)
             return
         vecs: dict[int, tuple[BitVec, BitVec]] = {}
@@ -163,7 +165,7 @@ class SymbolicGame:
         keys = self.spec.bit_keys
         shared: dict[str, str] = {}
         cur: dict[int, list[str]] = {k: [] for k in range(len(widths))}
-        for k in self._declaration_order("clustered"):
+        for k in self._declaration_order(VariableOrder.CLUSTERED):
             for i, key in enumerate(keys[k]):
                 if key is None or key == ERROR_BIT:
                     name = f"s{k}_{i}"
@@ -177,14 +179,14 @@ class SymbolicGame:
         self.cur = [BitVec(tuple(cur[k])) for k in range(len(widths))]
         self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
 
-    def _declaration_order(self, order: str) -> list[int]:
+    def _declaration_order(self, order: VariableOrder) -> list[int]:
         """Component order in the BDD: given order, or (``clustered``) each fluent monitor
         placed right after the body component sharing most actions with it, so a fluent's bit
         sits next to the state bits it is correlated with."""
         spec = self.spec
         nbody = spec.num_plant + spec.num_safety
         ks = list(range(len(spec.components)))
-        if order != "clustered" or nbody == 0:
+        if order is not VariableOrder.CLUSTERED or nbody == 0:
             return ks
         after: dict[int, list[int]] = {k: [] for k in range(nbody)}
         for f in range(nbody, len(ks)):

@@ -1,0 +1,39 @@
+"""Options passed between the synthesis stages, as enums (issue 12: no option strings).
+
+Dependency-free (no ``dd``): the command line builds its ``choices`` from these before any
+BDD package is imported.
+"""
+
+from __future__ import annotations
+
+import enum
+
+__all__ = ["Solver", "StrEnum", "VariableOrder"]
+
+
+class StrEnum(str, enum.Enum):
+    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self.value), spec)
+
+
+class Solver(StrEnum):
+    """Which GR(1) solver :func:`driver.synthesize` runs (both give the same verdict and
+    controller)."""
+
+    SYMBOLIC = "symbolic"  # BDD fixpoint (default)
+    EXPLICIT = "explicit"  # MTSA's explicit rank solver
+
+
+class VariableOrder(StrEnum):
+    """BDD variable orders of the symbolic solver (``iterc synth --order``; see
+    :mod:`symbolic_game`)."""
+
+    CLUSTERED = "clustered"
+    ACTION_FIRST = "action_first"
+    ACTION_LAST = "action_last"
+    BLOCKED = "blocked"
