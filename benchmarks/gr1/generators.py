@@ -17,7 +17,11 @@ Families (n = parameter):
 * ``amba_fm15`` — our reading of the Filippidis–Murray (Caltech TR 2015) revision: binary
   ``hmaster`` and binary ``grant`` (instead of one-hot grants), no ``busreq`` helper output,
   and the weakened A1 (only a *started* locked incremental burst obliges the master to
-  eventually drop its request).
+  eventually drop its request).  Harder than the published instances (docs/gr1.md).
+* ``synt15`` — the SYNT'15 instances of that revision as published (open Promela,
+  ``johnyf/gr1experiments`` ``examples/synt15/pml/synt15_<n>.txt``), re-encoded by us from
+  the specification text with the monitor processes as program-counter automata; the
+  anchor tools' synt15 numbers were measured on the same specification.
 
 Unrealizable variants with a known verdict (the reason is in each docstring):
 ``arbiter_immediate``, ``amba_nohready``, ``genbuf_noreceiver``.
@@ -40,6 +44,7 @@ from specbuild import (  # noqa: E402
     AND,
     FALSE,
     OR,
+    TRUE,
     F,
     SpecBuilder,
     bits_needed,
@@ -401,6 +406,134 @@ def amba_fm15(n: int) -> str:
     return s.text()
 
 
+def _le(bits: list[F], bound: int) -> F:
+    """``bits <= bound`` (LSB first, unsigned); TRUE when every pattern is in range."""
+    if bound >= (1 << len(bits)) - 1:
+        return TRUE
+    out = TRUE  # bits[:k] <= bound's low k bits; the higher bit decides, ties go down
+    for k, b in enumerate(bits):
+        out = (~b | out) if (bound >> k) & 1 else (~b & out)
+    return out
+
+
+def _edges(pc: F, pc_next: F, nodes: dict[int, list[tuple[int, F]]]) -> list[F]:
+    """One TRANS line per program-graph node ``u`` of a one-bit program counter:
+    ``pc = u → ⋁ (pc' = v ∧ formula)`` over the node's out-edges ``(v, formula)``."""
+    lines = []
+    for u, out in nodes.items():
+        at_u = pc if u else ~pc
+        lines.append(implies(at_u, OR((pc_next if v else ~pc_next) & f for v, f in out)))
+    return lines
+
+
+def synt15(n: int) -> str:
+    """The Filippidis–Murray AMBA AHB arbiter exactly as published for SYNT'15
+    (``johnyf/gr1experiments``, ``examples/synt15/pml/synt15_<n>.txt``, open Promela), with
+    ``n`` masters, re-encoded here from the specification text; the choices made for open
+    Promela's semantics are in docs/gr1.md ("synt15").
+
+    Environment: ``ready``, ``burst`` ∈ 0..2 (SINGLE, BURST4, INCR), ``request[0..n-1]``,
+    ``grantee_lockreq``, ``master_lockreq`` and the program counter of the assumption
+    process ``withdraw_lock`` (A1).  System: ``start``, ``decide``, ``lock``, ``lockmemo``,
+    ``master``, ``grant`` ∈ 0..n-1 (binary), ``decide_prev`` (the value of ``--X decide``),
+    and the program counters of ``maintain_lock`` (G2) and ``count_burst`` (G3) with G3's
+    local ``count`` ∈ 0..3.
+    """
+    s = SpecBuilder(f"AMBA AHB arbiter, SYNT'15 instance (Filippidis-Murray), {n} masters")
+    w = bits_needed(n)
+    ready = s.input("ready")
+    burst = [s.input(f"burst{k}") for k in range(2)]
+    request = [s.input(f"request{i}") for i in range(n)]
+    grantee_lockreq = s.input("grantee_lockreq")
+    master_lockreq = s.input("master_lockreq")
+    pc_a1 = s.input("pc_withdraw_lock")
+    start = s.output("start")
+    decide = s.output("decide")
+    lock = s.output("lock")
+    lockmemo = s.output("lockmemo")
+    master = [s.output(f"master{k}") for k in range(w)]
+    grant = [s.output(f"grant{k}") for k in range(w)]
+    decide_prev = s.output("decide_prev")
+    pc_g2 = s.output("pc_maintain_lock")
+    pc_g3 = s.output("pc_count_burst")
+    count = [s.output(f"count{k}") for k in range(2)]
+    _synt15_variables(s, n, ready, burst, request, grantee_lockreq, master_lockreq, start,
+                      decide, lock, master, grant)
+    _synt15_ltl(s, n, ready, request, grantee_lockreq, start, decide, lock, lockmemo,
+                master, grant, decide_prev)
+    _synt15_processes(s, ready, burst, master_lockreq, start, lock, pc_a1, pc_g2, pc_g3, count)
+    for i in range(n):
+        s.sys_live(implies(request[i], vec_eq(master, i)))
+    return s.text()
+
+
+def _synt15_variables(s: SpecBuilder, n: int, ready: F, burst: list[F], request: list[F],
+                      grantee_lockreq: F, master_lockreq: F, start: F, decide: F, lock: F,
+                      master: list[F], grant: list[F]) -> None:
+    """Initial values of the declarations (A4, G11; ``free`` without a value = any value
+    in range) and the range constraints of the integers (init and primed, as slugs does)."""
+    s.env_init(~ready & AND(~r for r in request) & ~grantee_lockreq & ~master_lockreq
+               & _le(burst, 2))
+    s.env_trans(_le([b.p for b in burst], 2))
+    s.sys_init(start & decide & ~lock & vec_eq(master, 0) & _le(grant, n - 1))
+    s.sys_trans(_le([b.p for b in master], n - 1) & _le([b.p for b in grant], n - 1))
+
+
+def _synt15_ltl(s: SpecBuilder, n: int, ready: F, request: list[F], grantee_lockreq: F,
+                start: F, decide: F, lock: F, lockmemo: F, master: list[F], grant: list[F],
+                decide_prev: F) -> None:
+    """A2 and the ``assert ltl { [](...) }`` block: G1, G4–G8, G10; ``--X decide`` is the
+    one-bit memory ``decide_prev`` (false at time 0: strong previous)."""
+    s.env_live(ready)  # A2
+    same = [iff(a.p, a) for a in master]
+    s.sys_trans(implies(start.p, ready))  # G1
+    s.sys_trans(implies(ready, AND(iff(m.p, g) for m, g in zip(master, grant, strict=True))
+                        & iff(lock.p, lockmemo.p)), split=False)  # G4, G5
+    s.sys_trans(implies(~start.p, AND(same) & iff(lock.p, lock)), split=False)  # G6
+    s.sys_trans(implies(decide_prev, iff(lockmemo.p, grantee_lockreq.p)))  # G7
+    s.sys_trans(implies(~decide, AND(iff(g.p, g) for g in grant)), split=False)  # G8
+    s.sys_trans(implies(~decide_prev, iff(lockmemo.p, lockmemo)))  # G8
+    grant_p = [g.p for g in grant]
+    s.sys_trans(AND(iff(g.p, g) for g in grant) | vec_eq(grant_p, 0)
+                | OR(vec_eq(grant_p, i) & request[i] for i in range(1, n)), split=False)  # G10
+    s.sys_init(~decide_prev)
+    s.sys_trans(iff(decide_prev.p, decide))
+
+
+def _synt15_processes(s: SpecBuilder, ready: F, burst: list[F], master_lockreq: F, start: F,
+                      lock: F, pc_a1: F, pc_g2: F, pc_g3: F, count: list[F]) -> None:
+    """The three proctypes of the ``sync{}`` block and A1, each a two-node program graph
+    that takes exactly one enabled edge per step; node 0 is the outer ``do``."""
+    incr = vec_eq(burst, 2)
+    burst4 = vec_eq(burst, 1)
+    # A1 (env): do :: lock; do :: !master_lockreq'; break :: true od :: else od, with
+    # the progress label on node 0
+    s.env_init(~pc_a1)
+    for line in _edges(pc_a1, pc_a1.p, {0: [(1, lock), (0, ~lock)],
+                                         1: [(0, ~master_lockreq.p), (1, TRUE)]}):
+        s.env_trans(line, split=False)
+    s.env_live(~pc_a1)
+    # G2 (sys): do :: (lock && start && burst == INCR); do :: (!start && !master_lockreq');
+    # break :: !start od :: else od
+    trig2 = lock & start & incr
+    s.sys_init(~pc_g2)
+    for line in _edges(pc_g2, pc_g2.p, {0: [(1, trig2), (0, ~trig2)],
+                                        1: [(0, ~start & ~master_lockreq.p), (1, ~start)]}):
+        s.sys_trans(line, split=False)
+    # G3 (sys): count is imperative (unchanged except on the two edges that prime it)
+    cp = [c.p for c in count]
+    keep = AND(iff(c.p, c) for c in count)
+    trig3 = start & lock & burst4
+    first = trig3 & implies(ready, vec_eq(cp, 1)) & implies(~ready, vec_eq(cp, 0))
+    step = OR(vec_eq(count, k) & vec_eq(cp, k + 1) for k in range(3))
+    s.sys_init(~pc_g3 & vec_eq(count, 0))
+    g3 = {0: [(1, first), (0, ~trig3 & keep)],
+          1: [(1, ~start & ~ready & keep), (1, ~start & ready & step),
+              (0, ~start & ready & vec_eq(count, 3) & keep)]}
+    for line in _edges(pc_g3, pc_g3.p, g3):
+        s.sys_trans(line, split=False)
+
+
 FAMILIES: dict[str, Callable[[int], str]] = {
     "arbiter": arbiter,
     "lift": lift,
@@ -408,6 +541,7 @@ FAMILIES: dict[str, Callable[[int], str]] = {
     "genbuf": genbuf,
     "amba_jcss12": amba_jcss12,
     "amba_fm15": amba_fm15,
+    "synt15": synt15,
     "arbiter_immediate": arbiter_immediate,
     "amba_nohready": amba_nohready,
     "genbuf_noreceiver": genbuf_noreceiver,
@@ -421,6 +555,7 @@ VERDICTS: dict[str, bool] = {
     "genbuf": True,
     "amba_jcss12": True,
     "amba_fm15": True,
+    "synt15": True,
     "arbiter_immediate": False,
     "amba_nohready": False,
     "genbuf_noreceiver": False,

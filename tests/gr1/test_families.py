@@ -21,7 +21,7 @@ import generators  # noqa: E402
 
 SMALL = [
     ("arbiter", 2), ("arbiter", 4), ("lift", 2), ("lift", 4), ("genbuf", 2), ("genbuf", 3),
-    ("amba_jcss12", 2), ("amba_fm15", 2),
+    ("amba_jcss12", 2), ("amba_fm15", 2), ("synt15", 2), ("synt15", 3), ("synt15", 5),
     ("arbiter_immediate", 2), ("arbiter_immediate", 3), ("amba_nohready", 2),
     ("genbuf_noreceiver", 2),
 ]
@@ -86,7 +86,7 @@ def _simulate(spec, strategy, steps: int, seed: int) -> dict[int, int]:
 
 
 @pytest.mark.parametrize("family, n", [("arbiter", 3), ("lift", 3), ("genbuf", 2),
-                                       ("amba_jcss12", 2)])
+                                       ("amba_jcss12", 2), ("synt15", 2)])
 def test_strategy_simulation(family, n):
     spec, _ = parse(generators.FAMILIES[family](n))
     res, _ = solve(spec)
@@ -94,6 +94,18 @@ def test_strategy_simulation(family, n):
     advanced = _simulate(spec, res.strategy, steps=300, seed=n)
     # random environments are fair with probability 1, so the goal counter keeps cycling
     assert len(advanced) == len(spec.lines("SYS_LIVENESS"))
+
+
+@pytest.mark.parametrize("dropped", ["[ENV_LIVENESS]\nready\n", "! pc_withdraw_lock\n\n[SYS_LIVENESS]"])
+def test_synt15_needs_both_assumptions(dropped):
+    # without GF ready no access starts (G1) and the master never changes (G6); without A1's
+    # progress label a locked INCR burst never ends (G2): both make synt15 unrealizable
+    text = generators.synt15(2)
+    assert text.count(dropped) == 1
+    kept = dropped.replace("ready\n", "").replace("! pc_withdraw_lock\n", "")
+    spec, _ = parse(text.replace(dropped, kept))
+    res, _ = solve(spec, strategy=False)
+    assert not res.realizable
 
 
 def test_primed_liveness_uses_transition_based_fixpoint():
