@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from iterplan_compiler.runtime.runfiles import positive_float, sigterm_as_interrupt
-from iterplan_compiler.runtime.vehicle import SafeAction, Start
+from iterplan_compiler.runtime.vehicle import SafeAction, Start, VehicleBackend
 
 if TYPE_CHECKING:
     from iterplan_compiler.runtime.controller import ControllerTable
@@ -71,7 +71,8 @@ def _add_mission_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("controller", metavar="CONTROLLER.py",
                         help="controller module (from `iterc compile`)")
     parser.add_argument("--map", required=True, help="map file (JSON)")
-    parser.add_argument("--vehicle", choices=("sim", "mavlink"), default="sim")
+    parser.add_argument("--vehicle", choices=[v.value for v in VehicleBackend],
+                        default=VehicleBackend.SIM.value)
     parser.add_argument("--connect", default="tcp:127.0.0.1:5760",
                         help="MAVLink connection string (with --vehicle mavlink)")
     parser.add_argument("--start", choices=[s.value for s in Start], default=Start.AUTO.value,
@@ -298,7 +299,7 @@ def _options(args: argparse.Namespace
             wind = (values[0], values[1])
         except ValueError:
             return "--wind expects E,N (m/s)"
-    if args.vehicle == "mavlink" and (args.param or args.wind):
+    if VehicleBackend(args.vehicle) is VehicleBackend.MAVLINK and (args.param or args.wind):
         return ("--param and --wind configure the simulator; set a real vehicle's "
                 "parameters with your ground station")
     return until, passes, wind
@@ -311,7 +312,7 @@ def _vehicle(args: argparse.Namespace, grid: Any, params: dict[str, float],
     from iterplan_compiler.runtime.planner import PlannerMode
 
     chosen = PlannerMode(args.planner) if args.planner is not None else None
-    if args.vehicle == "sim":
+    if VehicleBackend(args.vehicle) is VehicleBackend.SIM:
         vehicle = _sim_vehicle(args, grid, params, wind, altitude)
         if chosen is None:   # calibrated simulator: the path follower flown on SITL
             chosen = PlannerMode.CARROT if params else PlannerMode.COURSE

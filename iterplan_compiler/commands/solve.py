@@ -10,6 +10,7 @@ import json
 import sys
 
 from iterplan_compiler.gr1.game import GameOrder
+from iterplan_compiler.gr1.slugsin import SpecFormat
 from iterplan_compiler.gr1.strategy import StrategyOptions, StrategyReordering
 
 HELP = "GR(1) realizability/strategy for a slugsin (or structuredslugs) file"
@@ -17,8 +18,8 @@ HELP = "GR(1) realizability/strategy for a slugsin (or structuredslugs) file"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("spec", help="specification file (slugsin, or structuredslugs)")
-    parser.add_argument("--format", choices=("slugsin", "structuredslugs", "auto"),
-                        default="auto",
+    parser.add_argument("--format", choices=[f.value for f in SpecFormat],
+                        default=SpecFormat.AUTO.value,
                         help="input format (default: by extension, .structuredslugs or slugsin)")
     parser.add_argument("--realizability-only", action="store_true",
                         help="decide realizability only: keep no iterates, build no strategy")
@@ -66,10 +67,7 @@ def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.gr1.game import GameOptions
     from iterplan_compiler.gr1.solve import SolverOptions, solve
 
-    fmt = args.format
-    if fmt == "auto":
-        fmt = "structuredslugs" if args.spec.endswith(".structuredslugs") else "slugsin"
-    if fmt == "structuredslugs":
+    if SpecFormat(args.format).resolve(args.spec) is SpecFormat.STRUCTUREDSLUGS:
         # Infix formulas and bounded integers, translated to the slugsin IR (gr1/structured.py).
         from iterplan_compiler.gr1 import structured
 

@@ -22,10 +22,29 @@ bad input.
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import Diagnostic, Span, error, warning
+
+
+class SpecFormat(enum.Enum):
+    """Input format of a GR(1) file (``iterc solve --format``): ``slugsin`` (this module),
+    ``structuredslugs`` (:mod:`structured`), or ``auto``: by the file's extension."""
+
+    SLUGSIN = "slugsin"
+    STRUCTUREDSLUGS = "structuredslugs"
+    AUTO = "auto"
+
+    def resolve(self, path: str) -> SpecFormat:
+        """The concrete format of ``path``: ``AUTO`` is ``STRUCTUREDSLUGS`` for a file ending
+        in ``.structuredslugs``, else ``SLUGSIN``; the others are themselves."""
+        if self is not SpecFormat.AUTO:
+            return self
+        return (SpecFormat.STRUCTUREDSLUGS if path.endswith(".structuredslugs")
+                else SpecFormat.SLUGSIN)
+
 
 SECTIONS = (
     "INPUT",

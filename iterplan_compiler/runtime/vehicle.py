@@ -63,6 +63,15 @@ class Start(Enum):
     AIRBORNE = "airborne"
 
 
+class VehicleBackend(Enum):
+    """Which :class:`Vehicle` ``iterc run --vehicle`` flies: ``sim`` the built-in simulator
+    (:class:`sim.SimVehicle`), ``mavlink`` an ArduPlane, SITL or real
+    (:class:`mavlink.MavlinkVehicle`)."""
+
+    SIM = "sim"
+    MAVLINK = "mavlink"
+
+
 class SafeAction(Enum):
     """What the runtime commands when it stops flying the plan (``--on-end``/``--on-fault``):
     ``loiter`` circles the map centre at the loiter radius, ``rtl`` returns home (and circles
