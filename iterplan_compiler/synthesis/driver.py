@@ -26,7 +26,7 @@ from iterplan_compiler.synthesis.encode import (
     SynthesisError,
     prepare,
 )
-from iterplan_compiler.synthesis.options import Solver, VariableOrder
+from iterplan_compiler.synthesis.options import GameMode, Solver, VariableOrder
 from iterplan_compiler.synthesis.strategy import (
     StrategyKind,
     extract_controller,
@@ -54,7 +54,7 @@ class SynthesisStats(Mapping[str, object]):
     """
 
     solver: Solver
-    mode: str | None = None
+    mode: GameMode | None = None
     strategy: StrategyKind | None = None
     warnings: tuple[str, ...] = ()
     precondition: str | None = None
@@ -246,7 +246,7 @@ def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], 
     say(f"explicit game: {game.num_states} states")
     t = time.perf_counter()
     alphabet = spec.plant_alphabet | _fluent_only_actions(spec)
-    if spec.mode == "nonblocking":
+    if spec.mode is GameMode.NONBLOCKING:
         marked = game.guarantees[0]
         region = nonblocking_region(game, marked)
         stats["t_solve"] = time.perf_counter() - t
@@ -279,7 +279,7 @@ def strategy_kind(problem: SynthesisProblem, spec: GameSpec) -> StrategyKind:
     ``controller`` composites, ``monolithicDirector`` without ``nonblocking`` (unchanged:
     MTSA answers it with the plant, §3.10) and any composite with the ``permissive`` flag
     (whose point is the extra moves) get MTSA's controller of §3.6."""
-    if spec.mode == "nonblocking" or ("heuristic" in problem.keywords
+    if spec.mode is GameMode.NONBLOCKING or ("heuristic" in problem.keywords
                                       and not problem.permissive):
         return StrategyKind.DIRECTOR
     return StrategyKind.PERMISSIVE
@@ -324,7 +324,7 @@ def check_compatibility(problem: SynthesisProblem, *, solver: Solver | str = Sol
     p = replace(problem, keywords=problem.keywords - {"heuristic"},
                 controllable=problem.controllable | faults, guarantees=(Const(False),),
                 failures=())
-    spec = prepare(p, mode="gr1")
+    spec = prepare(p, mode=GameMode.GR1)
     if Solver(solver) is Solver.EXPLICIT:
         game = _explicit.build_game(spec)
         winning = bool(_explicit.winning_region(game))
@@ -343,5 +343,5 @@ def check_compatibility(problem: SynthesisProblem, *, solver: Solver | str = Sol
 
 def plant_product(problem: SynthesisProblem) -> LTS:
     """MTSA's ``plant ||P = E~{G}``: the fluent-embedded product of §3.2 step 6."""
-    spec = prepare(problem, mode="gr1")
+    spec = prepare(problem, mode=GameMode.GR1)
     return _explicit.compose_explicit(spec.components, problem.name)

@@ -33,6 +33,7 @@ from iterplan_compiler.ir.formulas import (
 )
 from iterplan_compiler.ir.lts import LTS, TAU, make_lts
 from iterplan_compiler.ir.model import SynthesisProblem
+from iterplan_compiler.synthesis.options import GameMode
 
 
 class PreconditionFailure(Exception):
@@ -57,8 +58,8 @@ class GameSpec:
     re-composing), then ``num_safety`` safety machines, then the fluent monitors in the order
     of ``fluent_names``.  ``assumptions``/``guarantees``/``failures`` are propositional
     formulas over ``fluent_names``; empty lists keep MTSA's default (one TRUE set) to the
-    solvers.  ``mode`` is ``"gr1"`` or ``"nonblocking"`` (then ``guarantees`` holds the single
-    marking formula).
+    solvers.  ``mode`` is :attr:`GameMode.GR1` or :attr:`GameMode.NONBLOCKING` (then
+    ``guarantees`` holds the single marking formula).
     """
 
     name: str
@@ -70,7 +71,7 @@ class GameSpec:
     assumptions: tuple[Formula, ...]
     guarantees: tuple[Formula, ...]
     failures: tuple[Formula, ...]
-    mode: str = "gr1"
+    mode: GameMode = GameMode.GR1
     warnings: tuple[str, ...] = field(default=())
     #: per component, per code bit (LSB first): the feature key of that bit or None
     #: (:mod:`recode`; empty: no keys, the plain order)
@@ -108,16 +109,16 @@ def _action_fluent_name(actions: frozenset[str]) -> str:
                    else next(iter(actions)))
 
 
-def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
+def prepare(problem: SynthesisProblem, *, mode: GameMode | None = None) -> GameSpec:
     """Collect components and goal sets; raise :class:`SynthesisError` on unsupported goals."""
     kw = problem.keywords
     if mode is None:
         nb = problem.nonblocking and problem.marking is not None
-        mode = "nonblocking" if nb and ("heuristic" in kw or "monolithicDirector" in kw) \
-            else "gr1"
+        mode = GameMode.NONBLOCKING if nb and ("heuristic" in kw or "monolithicDirector" in kw) \
+            else GameMode.GR1
     plant = tuple(problem.plant)
     safety = tuple(problem.safety)
-    if mode == "nonblocking" and "monolithicDirector" in kw:
+    if mode is GameMode.NONBLOCKING and "monolithicDirector" in kw:
         safety = ()  # §3.10: the director algorithm only sees machine 0
     plant_alpha: set[str] = set()
     for c in plant + safety:
@@ -146,7 +147,7 @@ def prepare(problem: SynthesisProblem, *, mode: str | None = None) -> GameSpec:
         raise SynthesisError(
             "E0907", f"goal formula must be propositional (no X, U, W, [], <>): {f!r}")
 
-    if mode == "nonblocking":
+    if mode is GameMode.NONBLOCKING:
         marking = frozenset(problem.marking or ()) & plant_alpha
         goal_fl = Fluent("_Goal", marking, frozenset(plant_alpha - marking), False)
         used[goal_fl.name] = goal_fl

@@ -15,6 +15,7 @@ from itertools import product as _cartesian
 
 from iterplan_compiler.ir.lts import ERROR, LTS, TAU, make_lts
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
+from iterplan_compiler.synthesis.options import GameMode
 
 Edge = tuple[str, int]  # (label, target game state)
 
@@ -45,7 +46,7 @@ class ExplicitGame:
     alphabet: frozenset[str]
     tuples: list[tuple[int, ...] | None] = field(default_factory=list)
     error: int | None = None
-    mode: str = "gr1"
+    mode: GameMode = GameMode.GR1
 
 
 def _component_index(c: LTS) -> dict[int, dict[str, list[int]]]:

@@ -19,7 +19,7 @@ from iterplan_compiler.ir.lts import ERROR, LTS
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
-from iterplan_compiler.synthesis.options import VariableOrder
+from iterplan_compiler.synthesis.options import GameMode, VariableOrder
 from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame, quotient_leaves
@@ -136,7 +136,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     t = time.perf_counter()
     started = t if started is None else started
     said = False  # the verdict was said by the quotiented solve below
-    if quotient and spec.mode == "gr1":  # the director (§3.9) is ranked explicitly as is
+    if quotient and spec.mode is GameMode.GR1:  # the director (§3.9) is ranked explicitly as is
         qspec = quotient_leaves(spec)
         if qspec is not spec:
             stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
@@ -156,7 +156,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             if not isinstance(states, int) or states > EXPLAIN_MAX_STATES:
                 return ok, ctrl, why + _TOO_LARGE  # no trace past the bound anyway
             said = True
-    nonblocking = spec.mode == "nonblocking"
+    nonblocking = spec.mode is GameMode.NONBLOCKING
     g, reach = _game_and_reach(spec, order, stats, say, t)
     care = g.live if reach is None else reach
     t = time.perf_counter()
@@ -200,7 +200,7 @@ def _game_and_reach(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
     stats["order"] = order
     stats["t_encode"] = time.perf_counter() - t
     t = time.perf_counter()
-    nonblocking = spec.mode == "nonblocking"
+    nonblocking = spec.mode is GameMode.NONBLOCKING
     reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
     stats["t_reach"] = time.perf_counter() - t
     if reach is not None:

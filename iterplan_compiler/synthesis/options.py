@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import enum
 
-__all__ = ["Solver", "StrEnum", "VariableOrder"]
+__all__ = ["GameMode", "Solver", "StrEnum", "VariableOrder"]
 
 
 class StrEnum(str, enum.Enum):
@@ -19,6 +19,15 @@ class StrEnum(str, enum.Enum):
 
     def __format__(self, spec: str) -> str:
         return format(str(self.value), spec)
+
+
+class GameMode(StrEnum):
+    """Which game :func:`encode.prepare` poses: MTSA's GR(1) game (§3.3), or the supervisory
+    non-blocking game of ``heuristic``/``monolithicDirector`` with ``nonblocking`` (§3.9;
+    its single guarantee is the marking)."""
+
+    GR1 = "gr1"
+    NONBLOCKING = "nonblocking"
 
 
 class Solver(StrEnum):
