@@ -3,14 +3,18 @@
 - no module over 500 lines, no function over 80 lines;
 - no import cycles between modules, no upward imports between layers (table below);
 - no ``importlib`` loading of the project's own modules (static imports only);
-- ``runtime/`` imports without lark or dd (it ships to the companion computer).
+- ``runtime/`` imports without lark or dd (it ships to the companion computer);
+- every command-line ``choices=`` is built from an enum (``[m.value for m in SomeEnum]``, or a
+  module constant built that way): options are enums, not string lists (issue #12).
 
 Imports under ``if TYPE_CHECKING:`` are annotations only and do not count.
 """
 
 from __future__ import annotations
 
+import argparse
 import ast
+import enum
 import subprocess
 import sys
 from pathlib import Path
@@ -204,3 +208,99 @@ def test_graph_sees_imports() -> None:
     graph = _graph()
     assert "iterplan_compiler.runtime.iterator" in graph["iterplan_compiler.runtime.executor"]
     assert _cycles({"a": {"b"}, "b": {"a"}}) == [["a", "b"]]
+
+
+# -- CLI choices come from enums (issue #12: enums, not option strings) -----------------------
+
+
+def _enum_comprehension(expr: ast.expr) -> bool:
+    """``[m.value for m in E (if ...)]`` (or a generator/set, or ``tuple(...)``/``list(...)``
+    of one) over a name or attribute, i.e. an enum class, not over a literal."""
+    if isinstance(expr, ast.Call) and isinstance(expr.func, ast.Name) \
+            and expr.func.id in ("tuple", "list", "sorted") and len(expr.args) == 1:
+        expr = expr.args[0]
+    if not isinstance(expr, (ast.ListComp, ast.GeneratorExp, ast.SetComp)):
+        return False
+    gen = expr.generators
+    return (len(gen) == 1 and isinstance(gen[0].iter, (ast.Name, ast.Attribute))
+            and isinstance(expr.elt, ast.Attribute) and expr.elt.attr == "value")
+
+
+def _choices_from_enum(module: str, expr: ast.expr, trees: dict[str, ast.Module]) -> bool:
+    """``expr`` (the ``choices=`` of an ``add_argument`` in ``module``) is an enum
+    comprehension, or a name bound at module level, here or where it is imported from, to one."""
+    if _enum_comprehension(expr):
+        return True
+    if not isinstance(expr, ast.Name) or module not in trees:
+        return False
+    tree = trees[module]
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == expr.id for t in node.targets):
+            return _enum_comprehension(node.value)
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) \
+                and node.target.id == expr.id and node.value is not None:
+            return _enum_comprehension(node.value)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and not node.level \
+                and any((a.asname or a.name) == expr.id for a in node.names):
+            return _choices_from_enum(node.module, ast.Name(expr.id), trees)
+    return False
+
+
+def test_cli_choices_are_built_from_enums() -> None:
+    trees = {name: ast.parse(path.read_text(encoding="utf-8"))
+             for name, path in _modules().items()}
+    found, bad = 0, []
+    for name, tree in trees.items():
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr == "add_argument"):
+                continue
+            for kw in node.keywords:
+                if kw.arg == "choices":
+                    found += 1
+                    if not _choices_from_enum(name, kw.value, trees):
+                        bad.append(f"{name}:{node.lineno}: choices={ast.unparse(kw.value)}")
+    assert found >= 20, found  # the check sees the commands' options
+    assert bad == [], "build these choices from an enum ([m.value for m in E]): " + str(bad)
+
+
+def test_cli_choices_are_enum_values() -> None:
+    """The parsers as built: every option with choices offers values of one enum, which
+    parses each of them (so the command turns the string into the enum with ``E(value)``)."""
+    from iterplan_compiler import cli
+
+    parsers = [p for name in cli.COMMANDS for p in _all_parsers(cli.build_parser(only=name))]
+    enums = _all_enums()
+    bad, seen = [], 0
+    for parser in parsers:
+        for action in parser._actions:
+            if not action.choices or isinstance(action, argparse._SubParsersAction):
+                continue
+            seen += 1
+            values = set(action.choices)
+            if not any(values <= {m.value for m in e} for e in enums):
+                bad.append(f"{parser.prog} {'/'.join(action.option_strings) or action.dest}")
+    assert seen >= 20, seen
+    assert bad == []
+
+
+def _all_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    out = [parser]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out.extend(_all_parsers(sub))
+    return out
+
+
+def _all_enums() -> list[type[enum.Enum]]:
+    out: list[type[enum.Enum]] = []
+    for name in _modules():
+        mod = sys.modules.get(name)
+        if mod is None:
+            continue  # only what building the parsers imported
+        out.extend(v for v in vars(mod).values()
+                   if isinstance(v, type) and issubclass(v, enum.Enum) and v is not enum.Enum)
+    return out

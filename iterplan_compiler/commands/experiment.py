@@ -29,13 +29,13 @@ from iterplan_compiler import outputs
 from iterplan_compiler.commands.run import add_arrival_arguments
 
 HELP = "reproduce the paper's Fig. 3 experiments"
-CHOICES = ("fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table", "all")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from iterplan_compiler.experiments.missions import VehicleKind
+    from iterplan_compiler.experiments.sweeps import Experiment
 
-    parser.add_argument("name", choices=CHOICES, help="which experiment")
+    parser.add_argument("name", choices=[e.value for e in Experiment], help="which experiment")
     parser.add_argument("--quick", action="store_true",
                         help="small sizes (seconds; what CI runs)")
     parser.add_argument("--seeds", type=int, default=None,
@@ -77,17 +77,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from iterplan_compiler.experiments import harness, sweeps
+    from iterplan_compiler.experiments.sweeps import Experiment
+    from iterplan_compiler.runtime.sorter import SorterKind
 
     out = Path(args.out)
-    names = ["fig3a", "fig3b", "fig3c", "fig3d", "synthesis-table"] if args.name == "all" else [args.name]
+    names = Experiment(args.name).expand()
     sorters = None
     if args.sorters:
-        sorters = tuple(s.strip() for s in args.sorters.split(",") if s.strip())
-        bad = [s for s in sorters if s not in sweeps.SORTERS]
+        given = tuple(s.strip() for s in args.sorters.split(",") if s.strip())
+        bad = [s for s in given if s not in sweeps.SORTERS]
         if bad:
             print(f"iterc experiment: unknown sorter(s) {', '.join(bad)}; choose from "
                   f"{', '.join(sweeps.SORTERS)}", file=sys.stderr)
             return 2
+        sorters = tuple(SorterKind(s) for s in given)
     if args.warmup < 0:
         print("iterc experiment: --warmup must be at least 0", file=sys.stderr)
         return 2
@@ -106,10 +109,10 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     status = 0
     for name in names:
-        if name == "synthesis-table":
+        if name is Experiment.SYNTHESIS_TABLE:
             status = max(status, _synthesis_table(args, out))
             continue
-        if name == "fig3a":
+        if name is Experiment.FIG3A:
             status = max(status, _trajectories(args, out))
             continue
         status = max(status, _figure(name, args, out, jobs, sorters, harness, sweeps))
@@ -123,22 +126,26 @@ def _arrival(args: argparse.Namespace):
         return None
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
 
-    return (ArrivalHeadings(args.headings or "parallel"),
-            HeadingChoice(args.heading_choice or "shortest"))
+    return (ArrivalHeadings(args.headings) if args.headings else ArrivalHeadings.PARALLEL,
+            HeadingChoice(args.heading_choice) if args.heading_choice
+            else HeadingChoice.SHORTEST)
 
 
-def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
+def _figure(experiment, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     from iterplan_compiler.experiments import missions, plots
+    from iterplan_compiler.experiments.sweeps import Experiment
 
+    name = experiment.value  # in file names and messages
     sizes = getattr(args, "size_list", None)
+    cover = experiment is Experiment.FIG3C
     try:
-        cases = sweeps.sweep(name, quick=args.quick, seeds=args.seeds, sorters=sorters,
-                             universes=sizes if name != "fig3c" else None,
-                             counts=sizes if name == "fig3c" else None)
+        cases = sweeps.sweep(experiment, quick=args.quick, seeds=args.seeds, sorters=sorters,
+                             universes=sizes if not cover else None,
+                             counts=sizes if cover else None)
     except ValueError as exc:
         print(f"iterc experiment {name}: {exc}", file=sys.stderr)
         return 2
-    problem = missions.preflight(name, out / "controllers")
+    problem = missions.preflight(experiment, out / "controllers")
     if problem:
         print(f"iterc experiment {name}: cannot run: {problem}", file=sys.stderr)
         return 1
@@ -155,8 +162,7 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
         _finished_rows(final, fields)
     ident = {tuple(str(r[f]) for f in harness.CASE_FIELDS): r for r in done_rows
              if not r.get("error")}  # failed runs are run again
-    todo = [c for c in cases
-            if tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS) not in ident]
+    todo = [c for c in cases if tuple(str(v) for v in c.values()) not in ident]
     if done_rows:
         kept = len(cases) - len(todo)
         print(f"iterc experiment {name}: resuming: {kept} of {len(cases)} runs already done "
@@ -179,7 +185,7 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     by_case = dict(ident)
     for r in new_rows:
         by_case[tuple(str(r[f]) for f in harness.CASE_FIELDS)] = r
-    keys = [tuple(str(getattr(c, f)) for f in harness.CASE_FIELDS) for c in cases]
+    keys = [tuple(str(v) for v in c.values()) for c in cases]
     rows = [by_case[k] for k in keys if k in by_case]
     # finished runs of other sizes/sorters/seeds stay in the CSV (a sweep grows by re-runs)
     wanted = set(keys)
@@ -188,8 +194,8 @@ def _figure(name, args, out: Path, jobs: int, sorters, harness, sweeps) -> int:
     partial.unlink()  # only once the complete CSV is in place
     points = harness.aggregate(rows)
     outputs.atomic_write_text(out / f"{name}_summary.csv", harness.write_summary_csv(points))
-    png = plots.plot(name, points, out / f"{name}.png")
-    print(_summary_text(name, points))
+    png = plots.plot(experiment, points, out / f"{name}.png")
+    print(_summary_text(experiment, points))
     print(f"wrote {out / (name + '.csv')}, {out / (name + '_summary.csv')}, {png}")
     failed = [r for r in rows if r.get("error")]
     if failed:
@@ -235,8 +241,9 @@ def _resumable_rows(partial: Path, fields: list[str]) -> list[dict]:
 
 def _trajectories(args, out: Path) -> int:
     from iterplan_compiler.experiments import missions, trajectories
+    from iterplan_compiler.experiments.sweeps import Experiment
 
-    problem = missions.preflight("fig3b", out / "controllers")
+    problem = missions.preflight(Experiment.FIG3B, out / "controllers")
     if problem:
         print(f"iterc experiment fig3a: cannot run: {problem}", file=sys.stderr)
         return 1
@@ -260,13 +267,16 @@ def _trajectories(args, out: Path) -> int:
     return 0
 
 
-def _summary_text(name: str, points) -> str:
-    unit = "overhead %" if name == "fig3c" else "duration s"
+def _summary_text(experiment, points) -> str:
+    from iterplan_compiler.experiments.sweeps import Experiment
+
+    name, cover = experiment.value, experiment is Experiment.FIG3C
+    unit = "overhead %" if cover else "duration s"
     lines = [f"{name}: mean ± 3 SEM ({unit}), ideal s, overhead %",
              f"{'universe':>9} {'count':>5} {'sorter':<8} {'n':>3} {'value':>18} "
              f"{'ideal':>9} {'overhead':>9} {'physics floor':>16}"]
     for p in points:
-        if name == "fig3c":
+        if cover:
             val = f"{p.overhead_pct:8.1f} ± {p.overhead_err3:6.1f}"
         else:
             val = f"{p.duration:8.1f} ± {p.duration_err3:6.1f}"

@@ -69,7 +69,7 @@ class Progress:
 def _run_one(runner: Runner, case: Case) -> dict:
     """Run one case, never raising: failures become a row with ``error`` set."""
     t0 = time.perf_counter()
-    row: dict = dataclasses.asdict(case)
+    row: dict = dict(zip(CASE_FIELDS, case.values(), strict=True))
     try:
         res = dict(runner(case))
         row.update(res)

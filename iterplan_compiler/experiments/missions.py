@@ -22,9 +22,11 @@ from pathlib import Path
 from iterplan_compiler.experiments import flight
 from iterplan_compiler.experiments.flight import LogEvent
 from iterplan_compiler.experiments.stats import ideal_cover, ideal_patrol_loop
-from iterplan_compiler.experiments.sweeps import Case, case_map_data, layout
+from iterplan_compiler.experiments.sweeps import Case, Experiment, case_map_data, layout
+from iterplan_compiler.runtime.sorter import SorterKind
 
-EXAMPLE_OF = {"fig3b": "ordered_patrol", "fig3c": "cover", "fig3d": "cover"}
+EXAMPLE_OF = {Experiment.FIG3B: "ordered_patrol", Experiment.FIG3C: "cover",
+              Experiment.FIG3D: "cover"}
 
 
 class MeasurementError(RuntimeError):
@@ -57,7 +59,7 @@ def measure(case: Case, log: Sequence[LogEvent], grid, speed: float, warmup: int
     loops after ``warmup`` loops (the first loop carries the approach from the launch: the
     arrival pose at p.0 is the launch leg's); ``first_loop`` is the first loop's time,
     ``launch`` the time from the mission's start (after take-off) to the first visit of p.0."""
-    if case.experiment == "fig3b":
+    if case.experiment is Experiment.FIG3B:
         loops = loop_times(log)
         if len(loops) < warmup + case.loops:
             raise MeasurementError(f"only {len(loops)} complete patrol loop(s) in the log")
@@ -92,7 +94,7 @@ class StopWhen:
     iterator, ``n.next``, which means some region cell was skipped)."""
 
     def __init__(self, case: Case, grid, warmup: int = 0):
-        self.patrol = case.experiment == "fig3b"
+        self.patrol = case.experiment is Experiment.FIG3B
         self.needed = warmup + case.loops + 1
         self.seen = 0
         self.todo = set() if self.patrol else {int(c) for c in grid.sensors["cover"]}
@@ -107,7 +109,7 @@ class StopWhen:
         return event.label == "n.next"
 
 
-def preflight(experiment: str, ctrl_dir: Path) -> str | None:
+def preflight(experiment: Experiment, ctrl_dir: Path) -> str | None:
     """Compile the experiment's controller once (into ``ctrl_dir``) and check the runtime;
     return a message saying what is missing, or None when everything is there."""
     from iterplan_compiler.experiments.pipeline import StageError, compile_example
@@ -137,7 +139,7 @@ def kinematic_floor_s(case: Case, res, grid, radius: float, headings=None) -> fl
     from iterplan_compiler.runtime.tour import dubins_order_length
 
     h = grid.arrival_heading
-    if case.experiment == "fig3b":
+    if case.experiment is Experiment.FIG3B:
         pts = [grid.centre(int(grid.sensors[f"p.{i}"][0])) for i in range(case.count)]
         return kinematic_floor(pts, list(range(len(pts))), None, h, radius,
                                closed=True, headings=headings) / res.speed
@@ -174,7 +176,7 @@ class VehicleKind(enum.Enum):
 #: 4-12 seeds): grid 38 % against 52 % at 10 cells, equal at 25 and 61 (28 %, 27.5 %), about a
 #: point worse at 100 and 150 (the serpentine along the axis dominates large regions and
 #: sideways arrivals only add path-following error there).
-TOUR_HEADINGS_NAME = "parallel"
+TOUR_HEADINGS_NAME = "parallel"   # an ArrivalHeadings value (runtime.planner: imported lazily)
 TOUR_GRID_MAX = 25
 SITL_SLOW_PARAMS = {"AIRSPEED_CRUISE": 17.0, "WP_LOITER_RAD": 60.0}
 
@@ -185,7 +187,7 @@ def sim_params(kind: VehicleKind):
     return SimParams.from_arduplane(SITL_SLOW_PARAMS) if kind is VehicleKind.SITL else SimParams()
 
 
-def arrival_for(sorter: str, experiment: str = "fig3c", count: int = 0):
+def arrival_for(sorter: SorterKind, experiment: Experiment = Experiment.FIG3C, count: int = 0):
     """The planner's heading options: the paper's for its three sorters; ``tour`` on Cover
     flies its planned order with the planned arrival headings (``LOOKAHEAD``: the tour is the
     whole mission there; grid headings for up to :data:`TOUR_GRID_MAX` cells).  On Ordered Patrol the plan cannot know the mission's order (it is
@@ -193,7 +195,7 @@ def arrival_for(sorter: str, experiment: str = "fig3c", count: int = 0):
     1,000 locations, 23 % loop overhead with it against 10 % with the shortest heading."""
     from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
 
-    if sorter == "tour" and experiment != "fig3b":
+    if sorter is SorterKind.TOUR and experiment is not Experiment.FIG3B:
         name = "grid" if 0 < count <= TOUR_GRID_MAX else TOUR_HEADINGS_NAME
         return ArrivalHeadings(name), HeadingChoice.LOOKAHEAD
     return ArrivalHeadings.PARALLEL, HeadingChoice.SHORTEST
@@ -222,10 +224,10 @@ class Runner:
         from iterplan_compiler.runtime.planner import admissible_headings
 
         arrival = self.arrival or arrival_for(case.sorter, case.experiment, case.count)
-        warmup = self.warmup if case.experiment == "fig3b" else 0
+        warmup = self.warmup if case.experiment is Experiment.FIG3B else 0
         res = flight.fly(module, grid, sorter=case.sorter, seed=case.seed,
                          stop=StopWhen(case, grid, warmup),
-                         fast_skip=self.fast_skip and case.experiment == "fig3b",
+                         fast_skip=self.fast_skip and case.experiment is Experiment.FIG3B,
                          heading=layout(case).heading, params=sim_params(self.vehicle),
                          arrival=arrival)
         if not res.ok:

@@ -10,11 +10,35 @@ Cover); what a seed varies is :func:`layout`;
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
-SORTERS: tuple[str, ...] = ("distance", "last", "random", "tour")
-EXPERIMENTS: tuple[str, ...] = ("fig3b", "fig3c", "fig3d")
+from iterplan_compiler.runtime.sorter import SorterKind, sorter_kind
+
+
+class Experiment(enum.Enum):
+    """What ``iterc experiment NAME`` runs: the trajectories of Fig. 3(a), the sweeps of
+    Fig. 3(b)-(d) (:data:`EXPERIMENTS`, the experiment of a :class:`Case`), the synthesis-time
+    table, or ``all`` of them in this order (:meth:`expand`)."""
+
+    FIG3A = "fig3a"
+    FIG3B = "fig3b"
+    FIG3C = "fig3c"
+    FIG3D = "fig3d"
+    SYNTHESIS_TABLE = "synthesis-table"
+    ALL = "all"
+
+    def expand(self) -> tuple[Experiment, ...]:
+        """The experiments this choice runs (``ALL``: every other member, in order)."""
+        if self is Experiment.ALL:
+            return tuple(e for e in Experiment if e is not Experiment.ALL)
+        return (self,)
+
+
+SORTERS: tuple[str, ...] = tuple(k.value for k in SorterKind)
+#: the sweeps (their cases are flown by :class:`missions.Runner`)
+EXPERIMENTS: tuple[Experiment, ...] = (Experiment.FIG3B, Experiment.FIG3C, Experiment.FIG3D)
 
 #: Patrol locations of Fig. 3(b) as (col, row) cells, near the launch cell (0, 0), visited in
 #: this order.  The universe grows around them (the paper's Fig. 3(a)).
@@ -25,54 +49,62 @@ COVER_UNIVERSE_3C = 713
 COVER_COUNT_3D = 61
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(frozen=True)
 class Case:
     """One simulated mission.  ``count`` is the number of locations to cover (Cover) or of
-    patrol locations (Ordered Patrol); ``loops`` the number of patrol loops measured."""
+    patrol locations (Ordered Patrol); ``loops`` the number of patrol loops measured.
+    ``experiment`` and ``sorter`` may be given by their values (``"fig3b"``, ``"last"``):
+    they are converted to the enums here."""
 
-    experiment: str
+    experiment: Experiment
     universe: int
     count: int
-    sorter: str
+    sorter: SorterKind
     seed: int
     loops: int = 1
 
-    @property
-    def key(self) -> tuple:
-        """The point of the plot this case contributes a sample to."""
-        return (self.experiment, self.universe, self.count, self.sorter)
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "experiment", Experiment(self.experiment))
+        object.__setattr__(self, "sorter", sorter_kind(self.sorter))
+
+    def values(self) -> tuple[str, int, int, str, int, int]:
+        """The fields as written to the CSV (the enums by their values), in field order."""
+        return (self.experiment.value, self.universe, self.count, self.sorter.value,
+                self.seed, self.loops)
 
 
 @dataclass(frozen=True)
 class SweepConfig:
     """Sizes of one experiment."""
 
-    experiment: str
+    experiment: Experiment
     universes: tuple[int, ...]
     counts: tuple[int, ...]
     seeds: int
-    sorters: tuple[str, ...] = SORTERS
+    sorters: tuple[SorterKind, ...] = tuple(SorterKind)
     loops: int = 1
 
 
-FULL: dict[str, SweepConfig] = {
-    "fig3b": SweepConfig("fig3b", (1_000, 10_000, 50_000, 100_000, 200_000, 400_000, 700_000),
-                         (3,), seeds=30, loops=2),
-    "fig3c": SweepConfig("fig3c", (COVER_UNIVERSE_3C,), (10, 25, 61, 100, 150, 200, 300),
-                         seeds=30),
-    "fig3d": SweepConfig("fig3d", (200, 713, 2_000, 10_000, 50_000, 100_000, 200_000),
-                         (COVER_COUNT_3D,), seeds=30),
+FULL: dict[Experiment, SweepConfig] = {
+    Experiment.FIG3B: SweepConfig(Experiment.FIG3B,
+                                  (1_000, 10_000, 50_000, 100_000, 200_000, 400_000, 700_000),
+                                  (3,), seeds=30, loops=2),
+    Experiment.FIG3C: SweepConfig(Experiment.FIG3C, (COVER_UNIVERSE_3C,),
+                                  (10, 25, 61, 100, 150, 200, 300), seeds=30),
+    Experiment.FIG3D: SweepConfig(Experiment.FIG3D,
+                                  (200, 713, 2_000, 10_000, 50_000, 100_000, 200_000),
+                                  (COVER_COUNT_3D,), seeds=30),
 }
 
-QUICK: dict[str, SweepConfig] = {
-    "fig3b": SweepConfig("fig3b", (144, 400), (3,), seeds=2, loops=1),
-    "fig3c": SweepConfig("fig3c", (COVER_UNIVERSE_3C,), (6, 16), seeds=2),
-    "fig3d": SweepConfig("fig3d", (169, 400), (16,), seeds=2),
+QUICK: dict[Experiment, SweepConfig] = {
+    Experiment.FIG3B: SweepConfig(Experiment.FIG3B, (144, 400), (3,), seeds=2, loops=1),
+    Experiment.FIG3C: SweepConfig(Experiment.FIG3C, (COVER_UNIVERSE_3C,), (6, 16), seeds=2),
+    Experiment.FIG3D: SweepConfig(Experiment.FIG3D, (169, 400), (16,), seeds=2),
 }
 
 
-def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
-          sorters: tuple[str, ...] | None = None,
+def sweep(experiment: Experiment, *, quick: bool = False, seeds: int | None = None,
+          sorters: tuple[SorterKind, ...] | None = None,
           universes: tuple[int, ...] | None = None,
           counts: tuple[int, ...] | None = None) -> list[Case]:
     """The cases of one experiment, in a deterministic order (largest first, so the slow
@@ -80,8 +112,8 @@ def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
     configured sizes."""
     table = QUICK if quick else FULL
     if experiment not in table:
-        raise ValueError(f"unknown experiment {experiment!r}; expected one of "
-                         f"{', '.join(EXPERIMENTS)}")
+        raise ValueError(f"unknown experiment {getattr(experiment, 'value', experiment)!r}; "
+                         f"expected one of {', '.join(e.value for e in EXPERIMENTS)}")
     cfg = table[experiment]
     n_seeds = cfg.seeds if seeds is None else seeds
     if n_seeds < 1:
@@ -91,7 +123,7 @@ def sweep(experiment: str, *, quick: bool = False, seeds: int | None = None,
              for s in (sorters or cfg.sorters) for seed in range(n_seeds)]
     for case in cases:
         check_case(case)
-    return sorted(cases, key=lambda c: (-c.universe * max(c.count, 1), c))
+    return sorted(cases, key=lambda c: (-c.universe * max(c.count, 1), c.values()))
 
 
 def grid_shape(universe: int) -> tuple[int, int]:
@@ -140,7 +172,7 @@ def layout(case: Case) -> Layout:
                                                                                full_rows))))
     heading = float(rng.uniform(0.0, 2 * math.pi))
     offset = COVER_OFFSET
-    if case.experiment != "fig3b":
+    if case.experiment is not Experiment.FIG3B:
         side = math.ceil(math.sqrt(case.count))
         height = math.ceil(case.count / side)
         lo = HOME_BOX + 1
@@ -165,7 +197,7 @@ def cell_name(col: int, row: int) -> str:
 def check_case(case: Case) -> None:
     """Raise ValueError if the case's special cells do not fit in its universe."""
     cols, rows = grid_shape(case.universe)
-    if case.experiment == "fig3b":
+    if case.experiment is Experiment.FIG3B:
         special = list(PATROL_CELLS[: case.count])
         if case.count > len(PATROL_CELLS):
             raise ValueError(f"at most {len(PATROL_CELLS)} patrol locations are placed")
@@ -183,7 +215,7 @@ def case_map_data(case: Case) -> dict:
     cols, rows = grid_shape(case.universe)
     lay = layout(case)
     data: dict = {
-        "name": f"{case.experiment}-{case.universe}-{case.count}",
+        "name": f"{case.experiment.value}-{case.universe}-{case.count}",
         "cell_size": 50,
         "cols": cols,
         "rows": rows,
@@ -191,7 +223,7 @@ def case_map_data(case: Case) -> dict:
         "arrival_heading": 0,
         "sensors": {},
     }
-    if case.experiment == "fig3b":
+    if case.experiment is Experiment.FIG3B:
         for i, (c, r) in enumerate(PATROL_CELLS[: case.count]):
             data["sensors"][f"p.{i}"] = [[c, r]]
     else:

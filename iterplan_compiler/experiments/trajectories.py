@@ -11,20 +11,22 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-from iterplan_compiler.experiments.sweeps import PATROL_CELLS, Case
+from iterplan_compiler.experiments.sweeps import PATROL_CELLS, Case, Experiment
+from iterplan_compiler.runtime.sorter import SorterKind
 
 FULL_SIZES = (1_000, 100_000, 700_000)
 QUICK_SIZES = (144, 1_600, 10_000)
 
 
-def fly_tracks(ctrl_dir: Path, sizes, sorter: str = "last", seed: int = 0, loops: int = 1):
+def fly_tracks(ctrl_dir: Path, sizes, sorter: SorterKind = SorterKind.LAST, seed: int = 0,
+               loops: int = 1):
     """[(universe, FlightResult, grid)] for one Ordered Patrol mission per size."""
     from iterplan_compiler.experiments import flight, missions
 
     module = Path(ctrl_dir) / "ordered_patrol_controller.py"
     out = []
     for u in sizes:
-        case = Case("fig3b", u, 3, sorter, seed, loops)
+        case = Case(Experiment.FIG3B, u, 3, sorter, seed, loops)
         grid = missions.build_grid(case)
         res = flight.fly(module, grid, sorter=sorter, seed=seed,
                          stop=missions.StopWhen(case, grid))

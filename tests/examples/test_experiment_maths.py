@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from iterplan_compiler.experiments import harness, stats, sweeps
-from iterplan_compiler.experiments.sweeps import Case
+from iterplan_compiler.experiments.sweeps import Case, Experiment
+from iterplan_compiler.runtime.sorter import SorterKind
 
 
 def test_summary_matches_statistics_module():
@@ -72,14 +73,14 @@ def test_ideal_cover_is_a_lower_bound_of_any_order(n, sx, sy):
 
 
 def test_sweeps_full_sizes_follow_the_paper():
-    b = sweeps.sweep("fig3b")
+    b = sweeps.sweep(Experiment.FIG3B)
     assert max(c.universe for c in b) == 700_000
-    assert {c.sorter for c in b} == {"distance", "last", "random", "tour"}
+    assert {c.sorter for c in b} == set(SorterKind)
     assert len({c.seed for c in b}) == 30
-    c = sweeps.sweep("fig3c")
+    c = sweeps.sweep(Experiment.FIG3C)
     assert {x.universe for x in c} == {713}
     assert len({x.seed for x in c}) == 30
-    d = sweeps.sweep("fig3d")
+    d = sweeps.sweep(Experiment.FIG3D)
     assert {x.count for x in d} == {61}
 
 
@@ -89,7 +90,7 @@ def test_quick_cases_fit_their_maps(exp):
         data = sweeps.case_map_data(case)
         assert data["cols"] * data["rows"] >= case.universe
         sensors = data["sensors"]
-        if exp == "fig3b":
+        if exp is Experiment.FIG3B:
             assert sorted(sensors) == ["p.0", "p.1", "p.2"]
         else:
             assert len(sensors["cover"]) == case.count
@@ -105,13 +106,26 @@ def test_region_cells_contiguous_and_distinct():
 def test_bad_case_rejected():
     with pytest.raises(ValueError):
         sweeps.check_case(Case("fig3c", 20, 61, "last", 0))
+    with pytest.raises(ValueError, match="unknown experiment 'fig3a'; expected one of fig3b"):
+        sweeps.sweep(Experiment.FIG3A)
     with pytest.raises(ValueError):
-        sweeps.sweep("fig9")
+        Case("fig9", 20, 6, "last", 0)
+    with pytest.raises(ValueError, match="unknown sorter"):
+        Case("fig3c", 20, 6, "nearest", 0)
+
+
+def test_case_values_are_converted_to_enums():
+    case = Case("fig3c", 713, 25, "tour", 3)
+    assert case.experiment is Experiment.FIG3C and case.sorter is SorterKind.TOUR
+    assert case == Case(Experiment.FIG3C, 713, 25, SorterKind.TOUR, 3)
+    assert case.values() == ("fig3c", 713, 25, "tour", 3, 1)
+    assert Experiment.ALL.expand() == (Experiment.FIG3A, Experiment.FIG3B, Experiment.FIG3C,
+                                       Experiment.FIG3D, Experiment.SYNTHESIS_TABLE)
 
 
 def fake_runner(case: Case) -> dict:
     """Deterministic stand-in for a simulation: duration grows with the universe."""
-    if case.sorter == "random" and case.seed == 1 and case.universe == 400:
+    if case.sorter is SorterKind.RANDOM and case.seed == 1 and case.universe == 400:
         raise RuntimeError("simulated crash")
     ideal = 100.0
     return {"duration": ideal * (1 + case.universe / 1000) + case.seed, "ideal": ideal,
@@ -120,12 +134,12 @@ def fake_runner(case: Case) -> dict:
 
 @pytest.mark.parametrize("jobs", [1, 2])
 def test_harness_rows_csv_and_aggregate(jobs):
-    cases = sweeps.sweep("fig3b", quick=True)
+    cases = sweeps.sweep(Experiment.FIG3B, quick=True)
     out = io.StringIO()
     prog = harness.Progress(len(cases), "fig3b", stream=out)
     rows = harness.run_cases(cases, fake_runner, jobs=jobs, progress=prog)
-    assert [harness.dataclasses.astuple(c) for c in cases] == [
-        tuple(r[f] for f in harness.CASE_FIELDS) for r in rows]
+    assert [c.values() for c in cases] == [tuple(r[f] for f in harness.CASE_FIELDS) for r in rows]
+    assert rows[0]["experiment"] == "fig3b" and rows[0]["sorter"] in sweeps.SORTERS
     assert prog.done == len(cases) and prog.failed == 1
     assert "failed" in out.getvalue()
     failed = [r for r in rows if r["error"]]
@@ -155,7 +169,7 @@ def test_plots_written(tmp_path):
 def harness_plot(exp, rows, tmp_path):
     from iterplan_compiler.experiments import plots
 
-    return plots.plot(exp, harness.aggregate(rows), tmp_path / f"{exp}.png")
+    return plots.plot(exp, harness.aggregate(rows), tmp_path / f"{exp.value}.png")
 
 
 def test_trajectory_plot(tmp_path):
