@@ -41,6 +41,7 @@ action takes precedence over the map's rule.
 
 from __future__ import annotations
 
+import enum
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -72,12 +73,29 @@ TAKEOFF_DONE = ("takeoff.ended", "takeoff.complete", "takeoff.done", "airborne")
 LANDED = ("landed",)
 
 
+class BindingKind(enum.Enum):
+    """What a controllable label is bound to (:meth:`Bindings.resolve`); the executor, its
+    fast skip and the shadow run dispatch on it."""
+
+    CUSTOM = "custom"                  # a handler given with Bindings.bind
+    HAS_NEXT = "has.next"
+    REMOVE_NEXT = "remove.next"
+    RESET = "reset"
+    GO_NEXT = "go.next"
+    PHOTO = "photo"
+    TAKEOFF = "takeoff"
+    LAND = "land"
+    SENSOR_NEXT = "sensor.next"        # a sensor queried at the next location
+    SENSOR_CURRENT = "sensor.current"  # a sensor queried here
+    INSTANT = "instant"                # no effect: answered at once
+
+
 @dataclass
 class Binding:
     """A resolved binding: the handler and, for durative actions, which vehicle/planner event
     completes it (``"arrived"``, ``"takeoff_complete"``, ``"landed"``) and the answer label."""
 
-    kind: str
+    kind: BindingKind
     handler: Handler
     completes_on: str | None = None
     answer: str | None = None
@@ -138,46 +156,46 @@ class Bindings:
         for label in sorted(controllable):
             c = canon(label)
             if c in self.custom:
-                out[label] = Binding("custom", self.custom[c])
+                out[label] = Binding(BindingKind.CUSTOM, self.custom[c])
                 continue
             if c == "has.next":
                 y, n = answer(YES_NEXT), answer(NO_NEXT)
                 if y is None or n is None:
                     raise BindingError(f"{label!r} needs answers y.next/n.next in the alphabet")
-                out[label] = Binding("has.next", _has_next(unc[y], unc[n]), yes=unc[y],
+                out[label] = Binding(BindingKind.HAS_NEXT, _has_next(unc[y], unc[n]), yes=unc[y],
                                      no=unc[n])
             elif c == "remove.next":
-                out[label] = Binding("remove.next", _remove_next)
+                out[label] = Binding(BindingKind.REMOVE_NEXT, _remove_next)
             elif c in ("reset", "reset.iterator"):
-                out[label] = Binding("reset", _reset)
+                out[label] = Binding(BindingKind.RESET, _reset)
             elif c == "go.next":
                 a = answer(ARRIVED)
                 if a is None:
                     raise BindingError(f"{label!r} needs the answer 'arrived' in the alphabet")
-                out[label] = Binding("go.next", _go_next, "arrived", unc[a])
+                out[label] = Binding(BindingKind.GO_NEXT, _go_next, "arrived", unc[a])
             elif c in ("take.photo", "photo"):
-                out[label] = Binding("photo", _photo)
+                out[label] = Binding(BindingKind.PHOTO, _photo)
             elif c == "takeoff":
                 a = answer(TAKEOFF_DONE)
-                out[label] = Binding("takeoff", _takeoff, "takeoff_complete",
+                out[label] = Binding(BindingKind.TAKEOFF, _takeoff, "takeoff_complete",
                                      unc[a] if a else None)
             elif c == "land":
                 a = answer(LANDED)
-                out[label] = Binding("land", _land, "landed", unc[a] if a else None)
+                out[label] = Binding(BindingKind.LAND, _land, "landed", unc[a] if a else None)
             elif (m := re.fullmatch(r"(?:is\.)?next\.(.+)", c)) and (
                     f"yes.next.{m.group(1)}" in unc and f"no.next.{m.group(1)}" in unc):
                 x = m.group(1)
                 yes_l, no_l = unc[f"yes.next.{x}"], unc[f"no.next.{x}"]
-                out[label] = Binding("sensor.next", _sensor_next(sensor_pred(x, label), yes_l,
+                out[label] = Binding(BindingKind.SENSOR_NEXT, _sensor_next(sensor_pred(x, label), yes_l,
                                                                  no_l),
                                      mask=static_mask(x), yes=yes_l, no=no_l)
             elif (m := re.fullmatch(r"(?:is\.)?(.+)", c)) and (
                     f"yes.{m.group(1)}" in unc and f"no.{m.group(1)}" in unc):
                 x = m.group(1)
-                out[label] = Binding("sensor.current", _sensor_current(
+                out[label] = Binding(BindingKind.SENSOR_CURRENT, _sensor_current(
                     sensor_pred(x, label), unc[f"yes.{x}"], unc[f"no.{x}"]))
             else:
-                out[label] = Binding("instant", _instant)
+                out[label] = Binding(BindingKind.INSTANT, _instant)
         return out
 
 

@@ -49,6 +49,7 @@ import numpy as np
 from iterplan_compiler.runtime.bindings import (
     Binding,
     BindingError,
+    BindingKind,
     Bindings,
     answers_of,
     canon,
@@ -80,8 +81,8 @@ from iterplan_compiler.runtime.vehicle import (
 )
 
 #: Bindings through which the controller observes or moves the Iterator.
-ITERATOR_KINDS = frozenset({"has.next", "remove.next", "reset", "go.next", "sensor.next",
-                            "custom"})
+ITERATOR_KINDS = frozenset({BindingKind.HAS_NEXT, BindingKind.REMOVE_NEXT, BindingKind.RESET,
+                            BindingKind.GO_NEXT, BindingKind.SENSOR_NEXT, BindingKind.CUSTOM})
 
 
 class Executor:
@@ -295,7 +296,7 @@ class Executor:
                 start = v.prepare(self.cfg.start)
                 self._setup_planning()
                 self.log_entry("x", f"start {start.value}, planning radius {self.radius:.0f} m")
-                has_takeoff = any(b.kind == "takeoff" for b in self.bindings.values())
+                has_takeoff = any(b.kind is BindingKind.TAKEOFF for b in self.bindings.values())
                 if start is Start.AIRBORNE:
                     v.take_control()
                 elif self.cfg.auto_takeoff and not has_takeoff:
@@ -384,7 +385,7 @@ class Executor:
         log = self.log
         log_limit = cfg.log_limit
         choices = self._choices()
-        progress_kinds = ("remove.next", "reset", "go.next")
+        progress_kinds = (BindingKind.REMOVE_NEXT, BindingKind.RESET, BindingKind.GO_NEXT)
         skipping = self._skipping()
         since = 0           # steps since the last wait or iterator progress (livelock guard)
         n = 0

@@ -27,7 +27,7 @@ from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-from iterplan_compiler.runtime.bindings import Binding
+from iterplan_compiler.runtime.bindings import Binding, BindingKind
 from iterplan_compiler.runtime.controller import ControllerTable
 from iterplan_compiler.runtime.iterator import Iterator
 from iterplan_compiler.runtime.skip import Cycle, Sensors, fast_skip
@@ -89,7 +89,7 @@ class Shadow:
         it = iterator.fork()
         here = self.arrival(pose, target)
         it.resort(here)
-        go = next((b for b in self.bindings.values() if b.kind == "go.next"), None)
+        go = next((b for b in self.bindings.values() if b.kind is BindingKind.GO_NEXT), None)
         if go is None or go.answer is None:
             return Prediction(target, (), False, ShadowStop.ENVIRONMENT, 0)
         run = _Run(self, it, here, state, go.answer)
@@ -141,29 +141,29 @@ class _Run:
         b = self.sh.bindings[label]
         it = self.it
         kind = b.kind
-        if kind == "has.next":
+        if kind is BindingKind.HAS_NEXT:
             answer = b.yes if it.has_next() else b.no
             if answer is None:
                 return ShadowStop.ENVIRONMENT
             self.pending.append(answer)
-        elif kind == "sensor.next":
+        elif kind is BindingKind.SENSOR_NEXT:
             if b.mask is None or b.yes is None or b.no is None:
                 return ShadowStop.SENSOR
             cell = it.next
             if cell is None:
                 return ShadowStop.EXHAUSTED
             self.pending.append(b.yes if b.mask[cell] else b.no)
-        elif kind == "remove.next":
+        elif kind is BindingKind.REMOVE_NEXT:
             if not it.has_next():
                 return ShadowStop.EXHAUSTED
             it.remove_next()
-        elif kind == "reset":
+        elif kind is BindingKind.RESET:
             it.reset(self.pose)
-        elif kind == "go.next":
+        elif kind is BindingKind.GO_NEXT:
             return self._go(label, b, start)
-        elif kind == "sensor.current":
+        elif kind is BindingKind.SENSOR_CURRENT:
             return ShadowStop.SENSOR
-        elif kind != "instant":             # photo, takeoff, land, a user's binding
+        elif kind is not BindingKind.INSTANT:             # photo, takeoff, land, a user's binding
             return ShadowStop.EFFECT
         self.state = self.sh.table.delta[self.state][label]
         return None

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from iterplan_compiler.runtime.bindings import Binding
+from iterplan_compiler.runtime.bindings import Binding, BindingKind
 from iterplan_compiler.runtime.controller import ControllerTable
 from iterplan_compiler.runtime.iterator import Iterator
 
@@ -62,7 +62,7 @@ class Sensors:
 
 def static_sensors(bindings: Mapping[str, Binding]) -> Sensors:
     labels = tuple(sorted(a for a, b in bindings.items()
-                          if b.kind == "sensor.next" and b.mask is not None))
+                          if b.kind is BindingKind.SENSOR_NEXT and b.mask is not None))
     masks = tuple(np.asarray(bindings[a].mask) for a in labels)
     return Sensors(labels, masks)
 
@@ -96,13 +96,13 @@ def cycle(state: int, code: int, delta: Mapping[int, Mapping[str, int]],
             b = bindings[label]
             if label in wanted:
                 return None
-            if b.kind == "has.next":
+            if b.kind is BindingKind.HAS_NEXT:
                 assert b.yes is not None
                 pending.append(b.yes)
-            elif b.kind == "sensor.next" and label in bit:
+            elif b.kind is BindingKind.SENSOR_NEXT and label in bit:
                 yes = (code >> bit[label]) & 1
                 pending.append(b.yes if yes else b.no)  # type: ignore[arg-type]
-            elif b.kind == "remove.next":
+            elif b.kind is BindingKind.REMOVE_NEXT:
                 if removed:
                     return None
                 removed = True
