@@ -65,7 +65,7 @@ from iterplan_compiler.runtime.grid import GridMap
 from iterplan_compiler.runtime.ideal import ideal_distance  # re-exported
 from iterplan_compiler.runtime.iterator import Iterator
 from iterplan_compiler.runtime.mission import MissionContext, MissionEnd, RunConfig
-from iterplan_compiler.runtime.planner import MotionPlanner, admissible_headings
+from iterplan_compiler.runtime.planner import MotionPlanner, PlannerEventKind, admissible_headings
 from iterplan_compiler.runtime.results import LogEntry, MissionResult  # re-exported
 from iterplan_compiler.runtime.skip import Cycle, fast_skip, static_sensors
 from iterplan_compiler.runtime.sorter import Pose
@@ -260,9 +260,9 @@ class Executor:
         if self.cfg.observe is not None:
             self.cfg.observe(self, False)
         for pe in self.planner.update():
-            self.log_entry("p", f"{pe.kind} {pe.detail}",
+            self.log_entry("p", f"{pe.kind.value} {pe.detail}",
                            -1 if self.ctx.target_cell is None else self.ctx.target_cell)
-            if pe.kind == "arrived":
+            if pe.kind is PlannerEventKind.ARRIVED:
                 cell = self.ctx.target_cell
                 self.ctx.last_arrival = cell
                 self.counts["arrived"] += 1
@@ -270,7 +270,7 @@ class Executor:
                 self.arrivals.append((p.t - self.t0, -1 if cell is None else cell, p.x, p.y))
                 if "arrived" in self._waiting:
                     self._pending.append(self._waiting.pop("arrived"))
-            elif pe.kind == "stuck":
+            elif pe.kind is PlannerEventKind.STUCK:
                 raise MissionEnd(False, f"motion planner cannot reach cell "
                                         f"{self.grid.cell_name(self.ctx.target_cell or 0)} "
                                         f"({pe.detail})")

@@ -169,9 +169,17 @@ def shortest_csc(start: Pose, x: float, y: float, heading: float, radius: float)
     return best
 
 
+class PlannerEventKind(enum.Enum):
+    """What :meth:`MotionPlanner.update` reports (the value is what the event log says)."""
+
+    ARRIVED = "arrived"    # crossed the target's finish line within the acceptance width
+    MISSED = "missed"      # crossed it outside: replanned
+    STUCK = "stuck"        # missed too often: the mission cannot go on
+
+
 @dataclass
 class PlannerEvent:
-    kind: str          # "arrived" or "missed" or "stuck"
+    kind: PlannerEventKind
     t: float
     target: tuple[float, float]
     detail: str = ""
@@ -346,15 +354,16 @@ class MotionPlanner:
             if along >= -self.lead:
                 if abs(cross) <= self.accept:
                     self.arrived = True
-                    events.append(PlannerEvent("arrived", p.t, self.target,
+                    events.append(PlannerEvent(PlannerEventKind.ARRIVED, p.t, self.target,
                                                f"cross-track {cross:+.1f} m"))
                 elif along >= 0:
                     self.misses += 1
                     self._target_misses += 1
-                    kind = "stuck" if self._target_misses > self.max_misses else "missed"
+                    kind = (PlannerEventKind.STUCK if self._target_misses > self.max_misses
+                            else PlannerEventKind.MISSED)
                     events.append(PlannerEvent(kind, p.t, self.target,
                                                f"cross-track {cross:+.1f} m"))
-                    if kind == "missed":
+                    if kind is PlannerEventKind.MISSED:
                         self._plan()
                         return events + self.update()
         self._command(p)

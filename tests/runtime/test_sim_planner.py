@@ -7,7 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from iterplan_compiler.runtime.planner import MotionPlanner, PlannerMode, shortest_csc
+from iterplan_compiler.runtime.planner import (
+    MotionPlanner,
+    PlannerEventKind,
+    PlannerMode,
+    shortest_csc,
+)
 from iterplan_compiler.runtime.sim import G, SimParams, SimVehicle
 from iterplan_compiler.runtime.sorter import Pose, dubins_lengths
 from tests.runtime.dubins_ref import csc_length
@@ -131,9 +136,9 @@ def test_planner_visits_targets_inside_cells(mode):
         for _ in range(3000):
             v.advance(0.2)
             for e in pl.update():
-                if e.kind == "arrived":
+                if e.kind is PlannerEventKind.ARRIVED:
                     arrived = (v.x, v.y)
-                assert e.kind != "stuck"
+                assert e.kind is not PlannerEventKind.STUCK
             if arrived:
                 break
         assert arrived is not None
