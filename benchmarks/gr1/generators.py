@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -426,6 +427,25 @@ def _edges(pc: F, pc_next: F, nodes: dict[int, list[tuple[int, F]]]) -> list[F]:
     return lines
 
 
+@dataclass(frozen=True)
+class Synt15Vars:
+    """The declared variables of a synt15 instance (integers as LSB-first bit lists)."""
+
+    n: int
+    ready: F
+    burst: list[F]
+    request: list[F]
+    grantee_lockreq: F
+    master_lockreq: F
+    start: F
+    decide: F
+    lock: F
+    lockmemo: F
+    master: list[F]
+    grant: list[F]
+    decide_prev: F
+
+
 def synt15(n: int) -> str:
     """The Filippidis–Murray AMBA AHB arbiter exactly as published for SYNT'15
     (``johnyf/gr1experiments``, ``examples/synt15/pml/synt15_<n>.txt``, open Promela), with
@@ -439,99 +459,98 @@ def synt15(n: int) -> str:
     and the program counters of ``maintain_lock`` (G2) and ``count_burst`` (G3) with G3's
     local ``count`` ∈ 0..3.
     """
+    return synt15_spec(n, synt15_processes).text()
+
+
+def synt15_spec(n: int, processes: Callable[[SpecBuilder, Synt15Vars], None]) -> SpecBuilder:
+    """synt15 with the proctypes encoded by ``processes`` (which declares its own program
+    counters); the tests compare :func:`synt15_processes` with a literal transcription of
+    open Promela's translation."""
     s = SpecBuilder(f"AMBA AHB arbiter, SYNT'15 instance (Filippidis-Murray), {n} masters")
     w = bits_needed(n)
-    ready = s.input("ready")
-    burst = [s.input(f"burst{k}") for k in range(2)]
-    request = [s.input(f"request{i}") for i in range(n)]
-    grantee_lockreq = s.input("grantee_lockreq")
-    master_lockreq = s.input("master_lockreq")
+    v = Synt15Vars(
+        n=n, ready=s.input("ready"), burst=[s.input(f"burst{k}") for k in range(2)],
+        request=[s.input(f"request{i}") for i in range(n)],
+        grantee_lockreq=s.input("grantee_lockreq"), master_lockreq=s.input("master_lockreq"),
+        start=s.output("start"), decide=s.output("decide"), lock=s.output("lock"),
+        lockmemo=s.output("lockmemo"), master=[s.output(f"master{k}") for k in range(w)],
+        grant=[s.output(f"grant{k}") for k in range(w)], decide_prev=s.output("decide_prev"))
+    _synt15_variables(s, v)
+    _synt15_ltl(s, v)
+    processes(s, v)
+    for i in range(n):
+        s.sys_live(implies(v.request[i], vec_eq(v.master, i)))
+    return s
+
+
+def _synt15_variables(s: SpecBuilder, v: Synt15Vars) -> None:
+    """Initial values of the declarations (A4, G11; ``free`` without a value = any value
+    in range) and the range constraints of the integers (init and primed, as slugs does)."""
+    s.env_init(~v.ready & AND(~r for r in v.request) & ~v.grantee_lockreq & ~v.master_lockreq
+               & _le(v.burst, 2))
+    s.env_trans(_le([b.p for b in v.burst], 2))
+    s.sys_init(v.start & v.decide & ~v.lock & vec_eq(v.master, 0) & _le(v.grant, v.n - 1))
+    s.sys_trans(_le([b.p for b in v.master], v.n - 1) & _le([b.p for b in v.grant], v.n - 1))
+
+
+def _synt15_ltl(s: SpecBuilder, v: Synt15Vars) -> None:
+    """A2 and the ``assert ltl { [](...) }`` block: G1, G4–G8, G10; ``--X decide`` is the
+    one-bit memory ``decide_prev`` (false at time 0: strong previous)."""
+    s.env_live(v.ready)  # A2
+    s.sys_trans(implies(v.start.p, v.ready))  # G1
+    s.sys_trans(implies(v.ready, AND(iff(m.p, g) for m, g in zip(v.master, v.grant, strict=True))
+                        & iff(v.lock.p, v.lockmemo.p)), split=False)  # G4, G5
+    s.sys_trans(implies(~v.start.p, AND(iff(m.p, m) for m in v.master)
+                        & iff(v.lock.p, v.lock)), split=False)  # G6
+    s.sys_trans(implies(v.decide_prev, iff(v.lockmemo.p, v.grantee_lockreq.p)))  # G7
+    s.sys_trans(implies(~v.decide, AND(iff(g.p, g) for g in v.grant)), split=False)  # G8
+    s.sys_trans(implies(~v.decide_prev, iff(v.lockmemo.p, v.lockmemo)))  # G8
+    grant_p = [g.p for g in v.grant]
+    s.sys_trans(AND(iff(g.p, g) for g in v.grant) | vec_eq(grant_p, 0)
+                | OR(vec_eq(grant_p, i) & v.request[i] for i in range(1, v.n)),
+                split=False)  # G10
+    s.sys_init(~v.decide_prev)
+    s.sys_trans(iff(v.decide_prev.p, v.decide))
+
+
+def synt15_processes(s: SpecBuilder, v: Synt15Vars) -> None:
+    """The three proctypes of the ``sync{}`` block and A1, each a two-node program graph
+    that takes exactly one enabled edge per step; node 0 is the outer ``do``."""
     pc_a1 = s.input("pc_withdraw_lock")
-    start = s.output("start")
-    decide = s.output("decide")
-    lock = s.output("lock")
-    lockmemo = s.output("lockmemo")
-    master = [s.output(f"master{k}") for k in range(w)]
-    grant = [s.output(f"grant{k}") for k in range(w)]
-    decide_prev = s.output("decide_prev")
     pc_g2 = s.output("pc_maintain_lock")
     pc_g3 = s.output("pc_count_burst")
     count = [s.output(f"count{k}") for k in range(2)]
-    _synt15_variables(s, n, ready, burst, request, grantee_lockreq, master_lockreq, start,
-                      decide, lock, master, grant)
-    _synt15_ltl(s, n, ready, request, grantee_lockreq, start, decide, lock, lockmemo,
-                master, grant, decide_prev)
-    _synt15_processes(s, ready, burst, master_lockreq, start, lock, pc_a1, pc_g2, pc_g3, count)
-    for i in range(n):
-        s.sys_live(implies(request[i], vec_eq(master, i)))
-    return s.text()
-
-
-def _synt15_variables(s: SpecBuilder, n: int, ready: F, burst: list[F], request: list[F],
-                      grantee_lockreq: F, master_lockreq: F, start: F, decide: F, lock: F,
-                      master: list[F], grant: list[F]) -> None:
-    """Initial values of the declarations (A4, G11; ``free`` without a value = any value
-    in range) and the range constraints of the integers (init and primed, as slugs does)."""
-    s.env_init(~ready & AND(~r for r in request) & ~grantee_lockreq & ~master_lockreq
-               & _le(burst, 2))
-    s.env_trans(_le([b.p for b in burst], 2))
-    s.sys_init(start & decide & ~lock & vec_eq(master, 0) & _le(grant, n - 1))
-    s.sys_trans(_le([b.p for b in master], n - 1) & _le([b.p for b in grant], n - 1))
-
-
-def _synt15_ltl(s: SpecBuilder, n: int, ready: F, request: list[F], grantee_lockreq: F,
-                start: F, decide: F, lock: F, lockmemo: F, master: list[F], grant: list[F],
-                decide_prev: F) -> None:
-    """A2 and the ``assert ltl { [](...) }`` block: G1, G4–G8, G10; ``--X decide`` is the
-    one-bit memory ``decide_prev`` (false at time 0: strong previous)."""
-    s.env_live(ready)  # A2
-    same = [iff(a.p, a) for a in master]
-    s.sys_trans(implies(start.p, ready))  # G1
-    s.sys_trans(implies(ready, AND(iff(m.p, g) for m, g in zip(master, grant, strict=True))
-                        & iff(lock.p, lockmemo.p)), split=False)  # G4, G5
-    s.sys_trans(implies(~start.p, AND(same) & iff(lock.p, lock)), split=False)  # G6
-    s.sys_trans(implies(decide_prev, iff(lockmemo.p, grantee_lockreq.p)))  # G7
-    s.sys_trans(implies(~decide, AND(iff(g.p, g) for g in grant)), split=False)  # G8
-    s.sys_trans(implies(~decide_prev, iff(lockmemo.p, lockmemo)))  # G8
-    grant_p = [g.p for g in grant]
-    s.sys_trans(AND(iff(g.p, g) for g in grant) | vec_eq(grant_p, 0)
-                | OR(vec_eq(grant_p, i) & request[i] for i in range(1, n)), split=False)  # G10
-    s.sys_init(~decide_prev)
-    s.sys_trans(iff(decide_prev.p, decide))
-
-
-def _synt15_processes(s: SpecBuilder, ready: F, burst: list[F], master_lockreq: F, start: F,
-                      lock: F, pc_a1: F, pc_g2: F, pc_g3: F, count: list[F]) -> None:
-    """The three proctypes of the ``sync{}`` block and A1, each a two-node program graph
-    that takes exactly one enabled edge per step; node 0 is the outer ``do``."""
-    incr = vec_eq(burst, 2)
-    burst4 = vec_eq(burst, 1)
     # A1 (env): do :: lock; do :: !master_lockreq'; break :: true od :: else od, with
     # the progress label on node 0
     s.env_init(~pc_a1)
-    for line in _edges(pc_a1, pc_a1.p, {0: [(1, lock), (0, ~lock)],
-                                         1: [(0, ~master_lockreq.p), (1, TRUE)]}):
+    for line in _edges(pc_a1, pc_a1.p, {0: [(1, v.lock), (0, ~v.lock)],
+                                         1: [(0, ~v.master_lockreq.p), (1, TRUE)]}):
         s.env_trans(line, split=False)
     s.env_live(~pc_a1)
     # G2 (sys): do :: (lock && start && burst == INCR); do :: (!start && !master_lockreq');
     # break :: !start od :: else od
-    trig2 = lock & start & incr
+    trig2 = v.lock & v.start & vec_eq(v.burst, 2)
     s.sys_init(~pc_g2)
-    for line in _edges(pc_g2, pc_g2.p, {0: [(1, trig2), (0, ~trig2)],
-                                        1: [(0, ~start & ~master_lockreq.p), (1, ~start)]}):
+    g2 = {0: [(1, trig2), (0, ~trig2)],
+          1: [(0, ~v.start & ~v.master_lockreq.p), (1, ~v.start)]}
+    for line in _edges(pc_g2, pc_g2.p, g2):
         s.sys_trans(line, split=False)
     # G3 (sys): count is imperative (unchanged except on the two edges that prime it)
+    s.sys_init(~pc_g3 & vec_eq(count, 0))
+    for line in _edges(pc_g3, pc_g3.p, _count_burst_edges(v, count)):
+        s.sys_trans(line, split=False)
+
+
+def _count_burst_edges(v: Synt15Vars, count: list[F]) -> dict[int, list[tuple[int, F]]]:
+    """G3's program graph with the frame of ``count`` folded into the edges."""
     cp = [c.p for c in count]
     keep = AND(iff(c.p, c) for c in count)
-    trig3 = start & lock & burst4
-    first = trig3 & implies(ready, vec_eq(cp, 1)) & implies(~ready, vec_eq(cp, 0))
+    trig3 = v.start & v.lock & vec_eq(v.burst, 1)
+    first = trig3 & implies(v.ready, vec_eq(cp, 1)) & implies(~v.ready, vec_eq(cp, 0))
     step = OR(vec_eq(count, k) & vec_eq(cp, k + 1) for k in range(3))
-    s.sys_init(~pc_g3 & vec_eq(count, 0))
-    g3 = {0: [(1, first), (0, ~trig3 & keep)],
-          1: [(1, ~start & ~ready & keep), (1, ~start & ready & step),
-              (0, ~start & ready & vec_eq(count, 3) & keep)]}
-    for line in _edges(pc_g3, pc_g3.p, g3):
-        s.sys_trans(line, split=False)
+    return {0: [(1, first), (0, ~trig3 & keep)],
+            1: [(1, ~v.start & ~v.ready & keep), (1, ~v.start & v.ready & step),
+                (0, ~v.start & v.ready & vec_eq(count, 3) & keep)]}
 
 
 FAMILIES: dict[str, Callable[[int], str]] = {
