@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks" / "gr1"))
 
 import generators  # noqa: E402
-from specbuild import AND, OR, TRUE, F, SpecBuilder, implies, iff, vec_eq  # noqa: E402
+from specbuild import AND, OR, TRUE, F, SpecBuilder, iff, implies, vec_eq  # noqa: E402
 
 # (u, v, key, statement, executability guard)
 Edge = tuple[int, int, int, F, F]
