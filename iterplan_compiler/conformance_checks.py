@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from iterplan_compiler.diagnostics import Diagnostic, Severity
+from iterplan_compiler.ir.formulas import FormulaKind
 from iterplan_compiler.ir.model import Unrealizable
 
 if TYPE_CHECKING:
@@ -214,7 +215,7 @@ def holds(formula: str, system: str) -> Check:
         from iterplan_compiler.fltl.check import model_check
 
         named = ctx.model.formulas.get(formula)
-        if named is None or named.kind != "assert":
+        if named is None or named.kind is not FormulaKind.ASSERT:
             return CheckResult(name, Status.ERROR, f"no assert {formula} in the file")
         lts, diags = ctx.build(system)
         if lts is None or errors_of(diags):

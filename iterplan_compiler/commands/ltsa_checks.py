@@ -30,6 +30,7 @@ from iterplan_compiler.ir.analysis import (
     tau_closure,
     terminal_sets,
 )
+from iterplan_compiler.ir.formulas import FormulaKind
 from iterplan_compiler.ir.lts import ERROR, LTS
 
 E_DEADLOCK = "E1301"
@@ -114,7 +115,7 @@ def violated_property(model, target: str, lts: LTS, trace: tuple[str, ...]) -> s
     text = model.sources.get(span.file, model.source_text) if span.line > 0 else ""
     lines = text.splitlines()[max(span.line - 1, 0):(span.end_line or span.line)]
     mentioned = " ".join(lines)
-    names = [n for n, f in model.formulas.items() if f.kind == "ltl_property"]
+    names = [n for n, f in model.formulas.items() if f.kind is FormulaKind.LTL_PROPERTY]
     names += list(model.processes)
     procs = getattr(backend, "processes", {})
 

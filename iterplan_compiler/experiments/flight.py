@@ -97,7 +97,7 @@ def fly(module_path: Path, grid, *, sorter: SorterKind | str = "distance", seed:
         ) -> FlightResult:
     """Run the controller in ``module_path`` over ``grid`` until ``stop(event)`` is true (or
     ``max_time`` simulated seconds) with the ``sorter`` strategy (a :class:`SorterKind`, or
-    its value: the sweeps' cases carry the names they write to their CSV files).  ``fast_skip``: the executor's fast skip
+    its value).  ``fast_skip``: the executor's fast skip
     (``runtime/skip.py``), with ``has.next``/``y.next`` left out of the compact log so that
     skip cycles can be skipped.  ``observe``/``realtime`` go to the executor's RunConfig
     (the live view, ``iterc demo --view``).  ``heading``: the launch heading (default the

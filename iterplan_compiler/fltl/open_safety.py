@@ -24,7 +24,7 @@ from iterplan_compiler.fltl.safety import (
     recent_safety_dfa,
     safety_dfa,
 )
-from iterplan_compiler.ir.formulas import NamedFormula
+from iterplan_compiler.ir.formulas import FormulaKind, NamedFormula
 from iterplan_compiler.ir.lts import ERROR
 from iterplan_compiler.ir.model import Model
 
@@ -78,14 +78,14 @@ def safety_of_formulas(model: Model) -> list[Diagnostic]:
     """E0605 for every ``ltl_property``/``constraint`` that is not a safety formula."""
     out = []
     for name, named in model.formulas.items():
-        if named.kind not in ("ltl_property", "constraint"):
+        if named.kind is FormulaKind.ASSERT:
             continue
         trace = open_safety_witness(named, model)
         if trace is None:
             continue
         out.append(error(
             E_NOT_SAFETY,
-            f"{named.kind} {name} must be a safety formula, but it is not: the trace {trace} "
+            f"{named.kind.value} {name} must be a safety formula, but it is not: the trace {trace} "
             "(* = any action outside the formula's alphabet) has no bad prefix, yet it "
             "violates the formula; state a liveness goal in the controllerSpec's liveness "
             "list instead", named.span))

@@ -37,6 +37,7 @@ from iterplan_compiler.frontend.expressions import (
     truth,
 )
 from iterplan_compiler.frontend.processes import build_process
+from iterplan_compiler.ir.formulas import FormulaKind
 from iterplan_compiler.ir.lts import LTS, reachable, renamed
 from iterplan_compiler.ir.model import SynthesisProblem, Unrealizable
 
@@ -190,7 +191,7 @@ class Composition(Declarations):
         # a plain import (fltl pulls networkx in; most specs never need it)
         from iterplan_compiler.fltl.safety import safety_lts
 
-        lts, ds = safety_lts(nf, self.fluents, constraint=nf.kind == "constraint")
+        lts, ds = safety_lts(nf, self.fluents, constraint=nf.kind is FormulaKind.CONSTRAINT)
         diags.extend(ds)
         return None if lts is None else renamed(lts, name)
 

@@ -271,7 +271,8 @@ class Declarations:
                     {p.name: evaluate(p.default, self.env()) for p in d.params})
                 f = self.formula(d.formula, env, (name,))
                 ext = frozenset(expand_set(d.extension, env)) if d.extension else frozenset()
-                self.formulas[name] = F.NamedFormula(name, d.kind, f, ext, d.span)
+                self.formulas[name] = F.NamedFormula(name, F.FormulaKind(d.kind), f, ext,
+                                                     d.span)
             except EvalError as e:
                 # MTSA compiles formulas lazily: a broken, unused formula is not an error.  We
                 # warn now and report the error where the formula is used.

@@ -7,6 +7,7 @@ and ``assert`` references are already expanded, so a formula mentions only concr
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import NO_SPAN, Span
@@ -116,19 +117,30 @@ class WeakUntil(Formula):
     right: Formula
 
 
+class FormulaKind(enum.Enum):
+    """Which declaration a :class:`NamedFormula` comes from (the value is its keyword)."""
+
+    ASSERT = "assert"                # checked by `iterc verify` (FLTL model checking)
+    LTL_PROPERTY = "ltl_property"    # a safety property: composed as a safety automaton
+    CONSTRAINT = "constraint"        # the same, as an environment constraint
+
+
 @dataclass(frozen=True, slots=True)
 class NamedFormula:
     """An elaborated ``assert`` / ``ltl_property`` / ``constraint`` declaration.
 
-    ``kind`` is ``"assert"``, ``"ltl_property"`` or ``"constraint"``; ``extra_alphabet`` is the
-    ``+ {...}`` extension of the formula's alphabet.
+    ``kind`` is a :class:`FormulaKind` (its value, the keyword, is converted here);
+    ``extra_alphabet`` is the ``+ {...}`` extension of the formula's alphabet.
     """
 
     name: str
-    kind: str
+    kind: FormulaKind
     formula: Formula
     extra_alphabet: frozenset[str] = frozenset()
     span: Span = field(default=NO_SPAN, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", FormulaKind(self.kind))
 
 
 _BINARY: dict[type, str] = {And: "&&", Or: "||", Implies: "->", Iff: "<->", Until: "U",

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from iterplan_compiler.diagnostics import NO_SPAN, Diagnostic, Span
-from iterplan_compiler.ir.formulas import Fluent, Formula, NamedFormula
+from iterplan_compiler.ir.formulas import Fluent, Formula, FormulaKind, NamedFormula
 from iterplan_compiler.ir.lts import LTS
 
 #: Composite keywords that make a composite a synthesis problem (MTSA §1.11, §3.9, §3.10):
@@ -145,7 +145,7 @@ class Model:
 
     def names(self) -> tuple[str, ...]:
         """Names accepted by :meth:`build_lts`: processes, composites, ltl_property/constraint."""
-        extra = tuple(n for n, f in self.formulas.items() if f.kind != "assert")
+        extra = tuple(n for n, f in self.formulas.items() if f.kind is not FormulaKind.ASSERT)
         return self.processes + self.composites + extra
 
     def own_names(self) -> tuple[str, ...]:
