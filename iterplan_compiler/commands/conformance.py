@@ -33,6 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from iterplan_compiler import conformance as conf
+    from iterplan_compiler.conformance_checks import Status
 
     root: Path = args.corpus
     if not (root / "verdicts.tsv").is_file():
@@ -54,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"[{done:>3}/{len(rows)}] {res.status:<11} {res.key} ({res.seconds:.1f} s) "
               f"{names}", flush=True)
         for check in res.checks:
-            if check.detail and (args.verbose or check.status.value != "pass"):
+            if check.detail and (args.verbose or check.status is not Status.PASS):
                 print(f"      {check.status.value:<11} {check.name}: {check.detail}", flush=True)
 
     results = conf.run_corpus(root, rows, jobs=args.jobs, timeout=args.timeout,
