@@ -23,6 +23,7 @@ from iterplan_compiler.experiments import flight
 from iterplan_compiler.experiments.flight import LogEvent
 from iterplan_compiler.experiments.stats import ideal_cover, ideal_patrol_loop
 from iterplan_compiler.experiments.sweeps import Case, Experiment, case_map_data, layout
+from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
 from iterplan_compiler.runtime.sorter import SorterKind
 
 EXAMPLE_OF = {Experiment.FIG3B: "ordered_patrol", Experiment.FIG3C: "cover",
@@ -176,7 +177,7 @@ class VehicleKind(enum.Enum):
 #: 4-12 seeds): grid 38 % against 52 % at 10 cells, equal at 25 and 61 (28 %, 27.5 %), about a
 #: point worse at 100 and 150 (the serpentine along the axis dominates large regions and
 #: sideways arrivals only add path-following error there).
-TOUR_HEADINGS_NAME = "parallel"   # an ArrivalHeadings value (runtime.planner: imported lazily)
+TOUR_HEADINGS = ArrivalHeadings.PARALLEL
 TOUR_GRID_MAX = 25
 SITL_SLOW_PARAMS = {"AIRSPEED_CRUISE": 17.0, "WP_LOITER_RAD": 60.0}
 
@@ -193,11 +194,9 @@ def arrival_for(sorter: SorterKind, experiment: Experiment = Experiment.FIG3C, c
     whole mission there; grid headings for up to :data:`TOUR_GRID_MAX` cells).  On Ordered Patrol the plan cannot know the mission's order (it is
     in the controller), so a heading planned for the tour's next cell is a guess: measured at
     1,000 locations, 23 % loop overhead with it against 10 % with the shortest heading."""
-    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
-
     if sorter is SorterKind.TOUR and experiment is not Experiment.FIG3B:
-        name = "grid" if 0 < count <= TOUR_GRID_MAX else TOUR_HEADINGS_NAME
-        return ArrivalHeadings(name), HeadingChoice.LOOKAHEAD
+        grid = 0 < count <= TOUR_GRID_MAX
+        return ArrivalHeadings.GRID if grid else TOUR_HEADINGS, HeadingChoice.LOOKAHEAD
     return ArrivalHeadings.PARALLEL, HeadingChoice.SHORTEST
 
 

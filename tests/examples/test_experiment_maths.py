@@ -184,3 +184,15 @@ def test_trajectory_plot(tmp_path):
                           track=[(float(t), 10.0 * t, 5.0 * t) for t in range(20)])
     png = trajectories.plot_tracks([(144, res, grid)], tmp_path / "a.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_arrival_for_takes_the_enums():
+    from iterplan_compiler.experiments.missions import arrival_for
+    from iterplan_compiler.runtime.planner import ArrivalHeadings, HeadingChoice
+
+    assert arrival_for(SorterKind.TOUR, Experiment.FIG3C, 10) == (ArrivalHeadings.GRID,
+                                                                  HeadingChoice.LOOKAHEAD)
+    assert arrival_for(SorterKind.TOUR, Experiment.FIG3C, 61) == (ArrivalHeadings.PARALLEL,
+                                                                  HeadingChoice.LOOKAHEAD)
+    for sorter, exp in ((SorterKind.TOUR, Experiment.FIG3B), (SorterKind.LAST, Experiment.FIG3C)):
+        assert arrival_for(sorter, exp, 10) == (ArrivalHeadings.PARALLEL, HeadingChoice.SHORTEST)
