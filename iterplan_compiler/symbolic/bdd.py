@@ -59,6 +59,21 @@ def new_manager(*, backend: str | None = None, reordering: bool = False) -> Mana
     if name == "cudd":
         if _cudd is None:
             raise ImportError("dd.cudd is not available")
+        # dd's defaults, kept on purpose (measured on GyroLTL_637/_700 up to the verdict,
+        # `benchmarks/cudd_settings.py`, docs/synthesis.md "CUDD manager settings"):
+        # * computed table 2^18 entries initially: CUDD doubles it by itself while the hit
+        #   rate is above `min_hit` (30 %; 637 runs at 64 %) and it has at most twice the
+        #   unique table's slots, so 637's reaches 2^23 (256 MB) anyway; a fixed 2^24 cut the
+        #   cache insertions by 15 % but was 12-19 % *slower* (memory traffic), a capped 2^20-
+        #   2^22 17-69 % slower (recomputation), and a big initial table costs every small
+        #   problem its allocation (2^22: 50 ms, 120 MB);
+        # * `min_hit` lower: identical counters (the hit rate is far above 30 %);
+        # * garbage collection on: off was 21 % slower (5 collections, ~2 s, are cheaper than
+        #   a unique table twice as large) and doubles the memory;
+        # * memory estimate 1 GiB: CUDD collects at every unique-table growth once its memory
+        #   passes 0.9 of it (a 2^25-entry cache does: no verdict in 200 s); 637's manager
+        #   stays at ~480 MB through the director, and `loose_up_to` (6.7 M slots) is never
+        #   reached (2.4 M).  Raise the estimate together with any larger cache.
         bdd = _cudd.BDD()
     else:
         import dd.autoref as _autoref
