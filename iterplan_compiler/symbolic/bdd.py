@@ -73,7 +73,9 @@ def new_manager(*, backend: str | None = None, reordering: bool = False) -> Mana
         # * memory estimate 1 GiB: CUDD collects at every unique-table growth once its memory
         #   passes 0.9 of it (a 2^25-entry cache does: no verdict in 200 s); 637's manager
         #   stays at ~480 MB through the director, and `loose_up_to` (6.7 M slots) is never
-        #   reached (2.4 M).  Raise the estimate together with any larger cache.
+        #   reached (2.4 M).  Raise the estimate together with any larger cache;
+        # * not a manager setting: huge pages for CUDD's tables (glibc's `hugetlb` tunable,
+        #   read only at process start-up) gave ~7 % (median of 12 pairs), not taken.
         bdd = _cudd.BDD()
     else:
         import dd.autoref as _autoref
