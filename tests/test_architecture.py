@@ -29,7 +29,7 @@ MAX_FUNCTION_LINES = 80
 # Layers, lowest first: a module may import its own layer or lower ones, never higher.
 # ``runtime`` and its clients form their own column: runtime imports only ``outputs`` below it.
 LAYERS: dict[str, int] = {
-    "": 0, "diagnostics": 0, "limits": 0, "outputs": 0, "symbolic": 0,
+    "": 0, "diagnostics": 0, "enums": 0, "limits": 0, "outputs": 0, "symbolic": 0,
     "runtime": 1,
     "ir": 1,
     "fltl": 2,

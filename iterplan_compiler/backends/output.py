@@ -6,24 +6,15 @@ controller first so generated files depend only on the machine, not on synthesis
 
 from __future__ import annotations
 
-import enum
 import hashlib
 
 from iterplan_compiler.backends.python import emit_module
 from iterplan_compiler.diagnostics import Span
+from iterplan_compiler.enums import StrEnum
 from iterplan_compiler.ir.lts import LTS, reachable
 
 
-class _StrEnum(str, enum.Enum):
-    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
-
-    def __str__(self) -> str:
-        return str(self.value)
-
-    def __format__(self, spec: str) -> str:
-        return format(str(self.value), spec)
-
-class EmitKind(_StrEnum):
+class EmitKind(StrEnum):
     """What ``iterc compile`` writes."""
 
     PY = "py"      # a Python controller module (backends/python.py)

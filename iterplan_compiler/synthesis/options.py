@@ -6,19 +6,9 @@ BDD package is imported.
 
 from __future__ import annotations
 
-import enum
+from iterplan_compiler.enums import StrEnum
 
-__all__ = ["GameMode", "Solver", "StrEnum", "VariableOrder"]
-
-
-class StrEnum(str, enum.Enum):
-    """An enum whose members are their string values (``enum.StrEnum`` is Python 3.11+)."""
-
-    def __str__(self) -> str:
-        return str(self.value)
-
-    def __format__(self, spec: str) -> str:
-        return format(str(self.value), spec)
+__all__ = ["GameMode", "Solver", "VariableOrder"]
 
 
 class GameMode(StrEnum):
