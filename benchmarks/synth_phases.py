@@ -1,6 +1,7 @@
 """Per-phase CPU seconds of one symbolic ``synthesize`` call, and the controller's size.
 
     python benchmarks/synth_phases.py FILE [FILE ...] [--composite Control] [--runs 1]
+                                      [--macro auto|off]
 
 Each file runs in its own process (``--one``).  The phases are timed with
 ``time.process_time`` by wrapping the functions that implement them (the stats' ``t_*``
@@ -9,7 +10,8 @@ entries are wall-clock, which on a shared, loaded machine is up to 2-8x the CPU 
 * ``prepare``  — ``encode.prepare`` and the leaf quotient / fluent-aligned recoding;
 * ``encode``   — building the ``SymbolicGame`` (BDD encoding of the leaves);
 * ``reach``    — symbolic reachability and restricting the relations to it;
-* ``fixpoint`` — the GR(1) fixpoint (``fixpoint.gr1_winning``);
+* ``fixpoint`` — the GR(1) fixpoint (``fixpoint.gr1_winning``, or ``macro.solve_macro``
+  with its exit relation; ``--macro off`` solves the full game);
 * ``ranks``    — MTSA's rank layers (``symbolic_strategy.rank_layers``);
 * ``build``    — the enumeration of the controller / director (without its rank layers);
 * ``minimise`` — strong minimisation of the controller;
@@ -66,6 +68,8 @@ def _instrument(clock: _Clock) -> None:
     cls.reachable = clock.wrap("reach", cls.reachable)  # type: ignore[method-assign]
     cls.restrict = clock.wrap("reach", cls.restrict)  # type: ignore[method-assign]
     game.gr1_winning = clock.wrap("fixpoint", game.gr1_winning)
+    if hasattr(game, "solve_macro"):  # this tree's macro steps (synthesis/macro.py)
+        game.solve_macro = clock.wrap("fixpoint", game.solve_macro)
     symbolic_strategy.rank_layers = clock.wrap("ranks", symbolic_strategy.rank_layers)
     # the enumeration = the extraction entry points minus their rank layers
     for name in ("extract_gr1_strategy", "symbolic_controller"):  # this tree's, or older
@@ -75,7 +79,7 @@ def _instrument(clock: _Clock) -> None:
     driver._minimise = clock.wrap("minimise", driver._minimise)
 
 
-def run_one(path: str, composite: str) -> dict[str, Any]:
+def run_one(path: str, composite: str, macro: str = "auto") -> dict[str, Any]:
     import warnings
 
     warnings.simplefilter("ignore")
@@ -88,7 +92,12 @@ def run_one(path: str, composite: str) -> dict[str, Any]:
     clock = _Clock()
     _instrument(clock)
     t = time.process_time()
-    result = synthesize(problem, explain=False)
+    extra: dict[str, Any] = {}
+    if macro != "auto":  # trees without macro steps know no such option
+        from iterplan_compiler.synthesis.options import MacroSteps
+
+        extra["macro"] = MacroSteps(macro)
+    result = synthesize(problem, explain=False, **extra)
     clock.cpu["synth"] = time.process_time() - t
     clock.cpu["build"] -= clock.cpu["ranks"]  # rank layers run inside the extraction
     st = result.stats
@@ -97,9 +106,10 @@ def run_one(path: str, composite: str) -> dict[str, Any]:
             "states": st.get("controller_states"), "cpu": clock.cpu}
 
 
-def measure(path: Path, composite: str) -> dict[str, Any]:
+def measure(path: Path, composite: str, macro: str = "auto") -> dict[str, Any]:
     proc = subprocess.run([sys.executable, __file__, "--one", str(path), "--composite",
-                           composite], stdout=subprocess.PIPE, text=True, check=False)
+                           composite, "--macro", macro], stdout=subprocess.PIPE, text=True,
+                          check=False)
     lines = proc.stdout.strip().splitlines()
     return json.loads(lines[-1]) if lines else {"verdict": "crash"}
 
@@ -110,14 +120,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--composite", default="Control")
     ap.add_argument("--one", help=argparse.SUPPRESS)
     ap.add_argument("--runs", type=int, default=1, help="runs per file (the median is shown)")
+    ap.add_argument("--macro", default="auto", choices=("auto", "off"),
+                    help="macro steps of the symbolic solver (synthesis/macro.py)")
     args = ap.parse_args(argv)
     if args.one:
-        print(json.dumps(run_one(args.one, args.composite)))
+        print(json.dumps(run_one(args.one, args.composite, args.macro)))
         return 0
     head = ["file", "verdict", "strategy", "states", *PHASES]
     print("\t".join(head))
     for path in args.files:
-        runs = [measure(path, args.composite) for _ in range(args.runs)]
+        runs = [measure(path, args.composite, args.macro) for _ in range(args.runs)]
         runs.sort(key=lambda r: r.get("cpu", {}).get("synth", 0.0))
         r = runs[len(runs) // 2]
         cpu = r.get("cpu", {})

@@ -26,7 +26,7 @@ from iterplan_compiler.synthesis.encode import (
     SynthesisError,
     prepare,
 )
-from iterplan_compiler.synthesis.options import GameMode, Solver, VariableOrder
+from iterplan_compiler.synthesis.options import GameMode, MacroSteps, Solver, VariableOrder
 from iterplan_compiler.synthesis.strategy import (
     StrategyKind,
     extract_controller,
@@ -150,20 +150,22 @@ def synthesize(
     minimise: bool = True,
     max_states: int | None = 2_000_000,
     order: VariableOrder | str = VariableOrder.CLUSTERED,
+    macro: MacroSteps = MacroSteps.AUTO,
 ) -> SynthesisResult:
     """Solve ``problem`` (§3) and build its controller; never raises for bad specs.
 
     ``solver`` — ``"symbolic"`` (BDD, default) or ``"explicit"`` (MTSA's rank solver);
     both give the same verdict and the same controller.  ``order`` selects the symbolic
     variable order (:class:`VariableOrder`, see :mod:`symbolic_game`).  Both are converted
-    to their enums here; the stages below take the enums only.  Stats keys: ``game_states``, ``plant_states``
+    to their enums here; the stages below take the enums only.  ``macro``: the symbolic
+    solver's macro steps (:mod:`macro`; ``MacroSteps.OFF`` solves the full game).  Stats keys: ``game_states``, ``plant_states``
     (explicit) / ``bdd_nodes`` (symbolic), ``controller_states``, ``t_<phase>`` seconds.
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVERS}")
     stats: dict[str, Any] = {"solver": Solver(solver)}
     result = _synthesize(problem, Solver(solver), progress, explain, minimise, max_states,
-                         VariableOrder(order), stats)
+                         VariableOrder(order), stats, MacroSteps(macro))
     return SynthesisResult(result.realizable, result.controller, result.composition,
                            result.explanation, SynthesisStats.from_dict(stats),
                            result.diagnostics)
@@ -180,8 +182,8 @@ class _Outcome:
 
 def _synthesize(problem: SynthesisProblem, solver: Solver,
                 progress: Callable[[str], None] | None, explain: bool, minimise: bool,
-                max_states: int | None, order: VariableOrder, stats: dict[str, Any]
-                ) -> _Outcome:
+                max_states: int | None, order: VariableOrder, stats: dict[str, Any],
+                macro: MacroSteps = MacroSteps.AUTO) -> _Outcome:
     say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
     try:
@@ -208,7 +210,7 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
                                     order=order, permissive=problem.permissive,
-                                    started=t0, kind=kind)
+                                    started=t0, kind=kind, macro=macro)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
         return _Outcome(False, None, None, msg, (error("E0908", msg, problem.span),))

@@ -18,8 +18,9 @@ from typing import Any
 from iterplan_compiler.ir.lts import ERROR, LTS
 from iterplan_compiler.synthesis.encode import GameSpec, evaluate
 from iterplan_compiler.synthesis.explicit import ExplicitGame, explore_product
-from iterplan_compiler.synthesis.fixpoint import gr1_winning
-from iterplan_compiler.synthesis.options import GameMode, VariableOrder
+from iterplan_compiler.synthesis.fixpoint import Gr1Fixpoint, gr1_winning
+from iterplan_compiler.synthesis.macro import solve_macro
+from iterplan_compiler.synthesis.options import GameMode, MacroSteps, VariableOrder
 from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame, quotient_leaves
@@ -119,7 +120,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
                    order: VariableOrder = VariableOrder.CLUSTERED,
                    permissive: bool = False, quotient: bool = True,
                    started: float | None = None,
-                   kind: StrategyKind = StrategyKind.PERMISSIVE
+                   kind: StrategyKind = StrategyKind.PERMISSIVE,
+                   macro: MacroSteps = MacroSteps.AUTO
                    ) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
 
@@ -132,7 +134,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     ``started`` (``perf_counter`` time; default: this call) is when synthesis began: the
     verdict is reported through ``say`` as soon as the fixpoint decides it
     (:func:`_announce`), before the controller is extracted.  ``kind``: MTSA's controller
-    or the GR(1) director (:mod:`symbolic_strategy`)."""
+    or the GR(1) director (:mod:`symbolic_strategy`); ``macro``: compress controller-only
+    chains (:mod:`macro`) where that applies."""
     t = time.perf_counter()
     started = t if started is None else started
     said = False  # the verdict was said by the quotiented solve below
@@ -149,7 +152,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
                                            quotient=False, started=started,
-                                           kind=kind)
+                                           kind=kind, macro=macro)
             states = stats.get("game_states")
             if ok or not explain:
                 return ok, ctrl, why
@@ -163,9 +166,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     if nonblocking:
         return _solve_nonblocking(g, care, stats, explain, name, t, say, started)
     goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
-    fp = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live,
-                     must_contain=g.init, progress=say, cpre_lost=g.cpre_lost_chained,
-                     cpre_gained=g.cpre_gained)
+    fp = _fixpoint(g, care & g.live, goals, stats, say, macro)
     W = fp.winning & care
     stats["t_solve"] = time.perf_counter() - t
     stats["fixpoint_iterations"] = fp.iterations
@@ -189,6 +190,21 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     stats["t_extract"] = time.perf_counter() - t
     _peak(g, stats)
     return True, ctrl, ""
+
+
+def _fixpoint(g: SymbolicGame, care: Any, goals: list[Any], stats: dict[str, Any],
+              say: Callable[[str], None], macro: MacroSteps) -> Gr1Fixpoint:
+    """The GR(1) fixpoint of the game on ``care``: over the compressed game
+    (:func:`macro.solve_macro`) where that applies, else over the full game.  Not tried
+    without the reachable set (``care`` = every live state): the chains of unreachable
+    states are unstructured (GyroLTL_595 at the reach cap: no macro verdict in 90 s)."""
+    if macro is MacroSteps.AUTO and g.reach is not None:
+        fp = solve_macro(g, care, g.assumptions, goals, say=say, stats=stats)
+        if fp is not None:
+            return fp
+    return gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care,
+                       must_contain=g.init, progress=say, cpre_lost=g.cpre_lost_chained,
+                       cpre_gained=g.cpre_gained)
 
 
 def _game_and_reach(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],

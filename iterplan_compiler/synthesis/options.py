@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from iterplan_compiler.enums import StrEnum
 
-__all__ = ["GameMode", "Solver", "VariableOrder"]
+__all__ = ["GameMode", "MacroSteps", "Solver", "VariableOrder"]
 
 
 class GameMode(StrEnum):
@@ -36,3 +36,12 @@ class VariableOrder(StrEnum):
     ACTION_FIRST = "action_first"
     ACTION_LAST = "action_last"
     BLOCKED = "blocked"
+
+
+class MacroSteps(StrEnum):
+    """Whether the symbolic GR(1) solver compresses controller-only chains into macro steps
+    (:mod:`macro`): ``AUTO`` where its conditions hold and it pays, ``OFF`` never (the
+    full game, e.g. to measure the transform)."""
+
+    AUTO = "auto"
+    OFF = "off"
