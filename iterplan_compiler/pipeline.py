@@ -39,6 +39,7 @@ from iterplan_compiler.ir.solving import Synthesis
 from iterplan_compiler.synthesis import driver as synthesis_driver
 from iterplan_compiler.synthesis import encode as synthesis_encode
 from iterplan_compiler.synthesis.driver import (
+    MacroSteps,
     Solver,
     SynthesisResult,
     SynthesisStats,
@@ -255,6 +256,7 @@ class SynthesisOptions:
     solver: Solver = Solver.SYMBOLIC
     explain: bool = True
     order: VariableOrder = VariableOrder.CLUSTERED
+    macro: MacroSteps = MacroSteps.AUTO
     progress: Callable[[str], None] | None = field(default=None, compare=False)
 
 
@@ -281,7 +283,8 @@ def synthesise(posed: Posed, options: SynthesisOptions = SynthesisOptions()) -> 
         return Synthesised(posed.composite, problem, None, posed.diagnostics)
     result = synthesis_driver.synthesize(problem, solver=options.solver,
                                          progress=options.progress, explain=options.explain,
-                                         order=options.order)
+                                         order=options.order,
+                                         macro=options.macro)
     diags = [*posed.diagnostics, *result.diagnostics]
     for text in result.stats.warnings:
         diags.append(warning(W_SYNTHESIS, text, problem.span))

@@ -12,6 +12,7 @@ import sys
 from iterplan_compiler import pipeline
 from iterplan_compiler.diagnostics import Diagnostic, render
 from iterplan_compiler.synthesis.driver import (
+    MacroSteps,
     Solver,
     StrategyKind,
     SynthesisResult,
@@ -37,6 +38,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         choices=[o.value for o in VariableOrder],
                         default=VariableOrder.CLUSTERED.value,
                         help="BDD variable order (symbolic solver)")
+    parser.add_argument("--macro", choices=[m.value for m in MacroSteps],
+                        default=MacroSteps.AUTO.value,
+                        help="compress controller-only chains (e.g. a system turn of the "
+                             "SYNTECH15 translations) into macro steps where that is sound "
+                             "and pays (auto, default), or solve the full game (off); "
+                             "symbolic solver, docs/synthesis.md")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -59,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
     if posed.diagnostics:
         print(render(posed.diagnostics, elab.sources), file=sys.stderr)
     options = pipeline.SynthesisOptions(Solver(args.solver), explain=args.explain,
-                                        order=VariableOrder(args.order))
+                                        order=VariableOrder(args.order),
+                                        macro=MacroSteps(args.macro))
     synth = pipeline.synthesise(posed, options)
     result = synth.result
     if result is None:
@@ -83,6 +91,10 @@ def format_report(name: str, result: SynthesisResult) -> str:
                         else "")
                      + (f", |T| = {st.trans_bdd_nodes} BDD nodes over {st.bdd_vars} vars"
                         if st.trans_bdd_nodes is not None else ""))
+    if st.get("macro") == "on":
+        lines.append(f"  macro steps: {st.get('macro_chain_states')} controller-only chain "
+                     f"states compressed, {st.get('macro_v_states')} others, exit relation "
+                     f"{st.get('macro_exit_nodes')} BDD nodes")
     if result.realizable:
         what = "controller (director)" if st.strategy is StrategyKind.DIRECTOR else "controller"
         lines.append(f"  {what}: {st.controller_states} states, "

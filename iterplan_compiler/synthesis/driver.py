@@ -34,8 +34,8 @@ from iterplan_compiler.synthesis.strategy import (
     nonblocking_region,
 )
 
-__all__ = ["Solver", "StrategyKind", "SynthesisResult", "SynthesisStats", "VariableOrder",
-           "check_compatibility", "plant_product", "strategy_kind", "synthesize"]
+__all__ = ["MacroSteps", "Solver", "StrategyKind", "SynthesisResult", "SynthesisStats",
+           "VariableOrder", "check_compatibility", "plant_product", "strategy_kind", "synthesize"]
 
 
 SOLVERS = tuple(s.value for s in Solver)

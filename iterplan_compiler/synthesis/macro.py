@@ -119,7 +119,7 @@ class MacroGame:
         out, layer = S, S
         while layer != b.false:
             limits.check_deadline()
-            layer = self.chain & g._pre_of(True, layer) & ~out
+            layer = self.chain & g.pre_of(True, layer) & ~out
             out |= layer
         return out
 
@@ -152,7 +152,7 @@ def acyclic(g: SymbolicGame, C: Node) -> bool:
     A = C
     while A != b.false:
         limits.check_deadline()
-        nxt = A & g._pre_of(True, A)
+        nxt = A & g.pre_of(True, A)
         if nxt == A:
             return False
         A = nxt
@@ -189,7 +189,7 @@ def exit_relation(g: SymbolicGame, C: Node, V: Node, entries: Node,
     seen, M, steps = F, b.false, 0
     while F != b.false:
         limits.check_deadline()
-        img = g._post_of(True, F & C)
+        img = g.post_of(True, F & C)
         M |= img & V
         F = img & C & ~seen
         seen |= F

@@ -291,7 +291,7 @@ class SymbolicGame:
         good = disjoin(b, [self._pre(g, X, xg) for g in self.groups if g.controllable])
         return (self.env & ~env_bad) | (self.ctrl_owned & good)
 
-    def _pre_of(self, controllable: bool, X: Node) -> Node:
+    def pre_of(self, controllable: bool, X: Node) -> Node:
         """``∃s'. T ∧ X'`` over the groups of one controllability."""
         xn: list[Node] = []
         return disjoin(self.bdd, [self._pre(g, X, xn) for g in self.groups
@@ -307,17 +307,17 @@ class SymbolicGame:
         with one in ``removed`` (``cand``) need the check "some controllable successor in
         ``X``", which looks at successors of ``cand`` only — hence ``X`` may be replaced by
         its generalised cofactor on them (smaller, equal where it is read)."""
-        env_lost = within & self.env & self._pre_of(False, removed)
+        env_lost = within & self.env & self.pre_of(False, removed)
         return env_lost | self._ctrl_lost(X, removed, within)
 
     def _ctrl_lost(self, X: Node, removed: Node, within: Node) -> Node:
         """The controller states of :meth:`cpre_lost`."""
         b = self.bdd
-        cand = within & self.ctrl_owned & self._pre_of(True, removed)
+        cand = within & self.ctrl_owned & self.pre_of(True, removed)
         if cand == b.false:
             return b.false
-        succ = self._post_of(True, cand)
-        keep = cand & self._pre_of(True, cofactor(b, X & self.live, succ))
+        succ = self.post_of(True, cand)
+        keep = cand & self.pre_of(True, cofactor(b, X & self.live, succ))
         return cand & ~keep
 
     def cpre_lost_chained(self, X: Node, removed: Node, within: Node) -> Node:
@@ -331,7 +331,7 @@ class SymbolicGame:
         fewer steps (a step removing nothing is still a fixpoint).  GyroLTL_637's fixpoint:
         638 → 620 νX steps, CUDD cache insertions 28.4 M → 25.6 M (−10 %), peak live nodes
         1.19 M → 0.99 M (docs/synthesis.md)."""
-        env_lost = within & self.env & self._pre_of(False, removed)
+        env_lost = within & self.env & self.pre_of(False, removed)
         return env_lost | self._ctrl_lost(X & ~env_lost, removed | env_lost, within)
 
     def cpre_gained(self, X: Node, added: Node, within: Node) -> Node:
@@ -346,14 +346,14 @@ class SymbolicGame:
         may be replaced by its generalised cofactor on them."""
         b = self.bdd
         added = added & self.live
-        gained = within & self.ctrl_owned & self._pre_of(True, added)
-        cand = within & self.env & self._pre_of(False, added)
+        gained = within & self.ctrl_owned & self.pre_of(True, added)
+        cand = within & self.env & self.pre_of(False, added)
         if cand == b.false:
             return gained
-        bad = cofactor(b, ~((X | added) & self.live), self._post_of(False, cand))
-        return gained | (cand & ~self._pre_of(False, bad))
+        bad = cofactor(b, ~((X | added) & self.live), self.post_of(False, cand))
+        return gained | (cand & ~self.pre_of(False, bad))
 
-    def _post_of(self, controllable: bool, X: Node) -> Node:
+    def post_of(self, controllable: bool, X: Node) -> Node:
         """Successors of ``X`` (current variables) over the groups of one controllability."""
         b = self.bdd
         return disjoin(b, [b.let(g.unprime, and_exists(b, g.rel, X, g.cur_vars))

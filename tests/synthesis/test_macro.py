@@ -162,3 +162,16 @@ def test_turn_structured_spec():
     prob, _ = model.synthesis_problem("LooseControl")
     on = synthesize(prob, macro=MacroSteps.AUTO, explain=False)
     assert str(on.stats["macro"]).startswith("off")
+
+
+def test_synth_command_reports_and_switches_macro_steps(capsys):
+    """``iterc synth`` says when the macro steps were used and ``--macro off`` solves the
+    full game (same verdict, no macro line)."""
+    from iterplan_compiler.cli import main
+
+    assert main(["synth", str(TURNS_FSP), "Control"]) == 0
+    out = capsys.readouterr().out
+    assert "macro steps:" in out and "chain states compressed" in out
+    assert main(["synth", str(TURNS_FSP), "Control", "--macro", "off"]) == 0
+    out = capsys.readouterr().out
+    assert "realizable" in out and "macro steps:" not in out
