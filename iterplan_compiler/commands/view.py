@@ -59,11 +59,14 @@ def run(args: argparse.Namespace) -> int:
         server.start()
     except OSError as exc:
         return err(f"cannot serve on {host}:{port}: {exc.strerror or exc}")
-    print(f"replay view: {server.url}  (Ctrl-C to stop)", flush=True)
     from iterplan_compiler.runtime.runfiles import sigterm_as_interrupt
     from iterplan_compiler.view.live import wait
     try:
+        # SIGTERM handled before the URL is announced: a client that reads the line, uses
+        # the page and terminates the viewer gets a clean exit 0 even on a loaded machine
+        # (the handler used to be installed after the print, a race CI lost once)
         with sigterm_as_interrupt():
+            print(f"replay view: {server.url}  (Ctrl-C to stop)", flush=True)
             wait(args.linger)
     finally:
         server.stop()

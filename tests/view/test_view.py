@@ -294,6 +294,16 @@ def test_view_command_serves_the_replay(tmp_path):
         proc.terminate()
         assert proc.wait(20) == 0
         proc.stdout.close()
+    # terminated right after the announcement (no requests in between): still a clean exit,
+    # the SIGTERM handler is in place before the URL is printed
+    for _ in range(3):
+        proc = subprocess.Popen([sys.executable, "-m", "iterplan_compiler", "view", str(out),
+                                 "--map", str(FIRE_MAP), "--linger", "60"],
+                                stdout=subprocess.PIPE, text=True, cwd=ROOT)
+        assert "replay view:" in proc.stdout.readline()
+        proc.terminate()
+        assert proc.wait(20) == 0
+        proc.stdout.close()
 
 
 @needs_view
