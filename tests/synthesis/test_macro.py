@@ -17,7 +17,7 @@ from iterplan_compiler.ir.minimise import bisimilar
 from iterplan_compiler.synthesis.driver import synthesize
 from iterplan_compiler.synthesis.encode import prepare
 from iterplan_compiler.synthesis.fixpoint import gr1_winning
-from iterplan_compiler.synthesis.macro import chain_states, solve_macro
+from iterplan_compiler.synthesis.macro import chain_states, modified_vars, solve_macro
 from iterplan_compiler.synthesis.options import MacroSteps
 from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
@@ -41,10 +41,22 @@ def _turns(n, ctrl=tuple(CTRL)):
 
 
 @st.composite
-def turn_problems(draw):
+def _env_machine(draw):
+    """A machine of the environment alone (``u v``, enabled everywhere, so it blocks
+    nothing): no controllable move changes its state."""
+    n = draw(st.integers(2, 3))
+    trans = [(s, a, draw(st.integers(0, n - 1))) for s in range(n) for a in UNC]
+    return make_lts("E", n, trans, frozenset(UNC))
+
+
+@st.composite
+def turn_problems(draw, env_only=False):
     """A random plant over ``a b c u v`` under the turn structure; goals mostly ``tick && …``,
-    assumptions ``tock && …`` or ``Tock`` (true throughout a system turn)."""
+    assumptions ``tock && …`` or ``Tock`` (true throughout a system turn).  ``env_only``:
+    also an environment machine and fluent (variables no chain move modifies)."""
     plant = [_clock(), _turns(draw(st.integers(1, 3))), draw(lts_strategy("P"))]
+    if env_only:
+        plant.append(draw(_env_machine()))
     safety = (draw(lts_strategy("S", 2, error_ok=True)),) if draw(st.booleans()) else ()
     every = [*UNC, *CTRL, "tick", "tock"]
     fluents = [fl("Tk", {"tick"}, set(every) - {"tick"}), fl("Tc", {"tock"}, set(every) - {"tock"}),
@@ -54,6 +66,8 @@ def turn_problems(draw):
         term = draw(st.sets(st.sampled_from([a for a in CTRL + UNC if a not in init]),
                             max_size=2))
         fluents.append(fl(f"F{i}", init, term, draw(st.booleans())))
+    if env_only:
+        fluents.append(fl("Fu", {"u"}, {"v"}, draw(st.booleans())))
     lits = st.sampled_from([F(f.name) for f in fluents[3:]] + [Not(F(f.name)) for f in fluents[3:]])
     goal = st.one_of(lits.map(lambda p: And(F("Tk"), p)), lits)
     assumption = st.one_of(lits.map(lambda p: And(F("Tc"), p)), st.just(F("Tock")), lits)
@@ -84,6 +98,21 @@ def test_macro_keeps_the_winning_region(prob):
         if fp.complete:
             assert fp.winning & reach == full.winning & reach
         else:  # stopped early: the initial state is lost in both
+            assert g.init & full.winning == g.bdd.false
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(turn_problems(env_only=True))
+def test_macro_copies_only_modified_variables(prob):
+    """``M`` keeps a copy of the variables chain moves modify only (``modified_vars``); the
+    environment machine's and ``Fu``'s are left out, and the winning region is the same."""
+    for g, reach, full, fp, stats in _both(prob):
+        assert len(modified_vars(g)) < len(g.cur_vars)
+        if fp is None:  # E may block ``tock``: then no system turn is reached
+            assert stats["macro"] == "off: few chain states", stats
+        elif fp.complete:
+            assert fp.winning & reach == full.winning & reach
+        else:
             assert g.init & full.winning == g.bdd.false
 
 
