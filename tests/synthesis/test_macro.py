@@ -94,7 +94,10 @@ def _both(prob, min_share=0.0):
 @given(turn_problems())
 def test_macro_keeps_the_winning_region(prob):
     for g, reach, full, fp, stats in _both(prob):
-        assert fp is not None, stats  # Turns bounds every chain: the transform applies
+        if fp is None:  # only when there is no chain state at all (e.g. the plant blocks
+            # every controlled move): Turns bounds every chain, so otherwise it applies
+            assert stats.get("macro_chain_states") == 0, stats
+            continue
         if fp.complete:
             assert fp.winning & reach == full.winning & reach
         else:  # stopped early: the initial state is lost in both
