@@ -158,8 +158,9 @@ def synthesize(
     both give the same verdict and the same controller.  ``order`` selects the symbolic
     variable order (:class:`VariableOrder`, see :mod:`symbolic_game`).  Both are converted
     to their enums here; the stages below take the enums only.  ``macro``: the symbolic
-    solver's macro steps (:mod:`macro`; ``MacroSteps.OFF`` solves the full game).  Stats keys: ``game_states``, ``plant_states``
-    (explicit) / ``bdd_nodes`` (symbolic), ``controller_states``, ``t_<phase>`` seconds.
+    solver's macro steps (:mod:`macro`; ``MacroSteps.OFF`` solves the full game).  Stats
+    keys: ``game_states``, ``plant_states`` (explicit) / ``bdd_nodes`` (symbolic),
+    ``controller_states``, ``t_<phase>`` seconds; ``macro*`` with the macro steps.
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVERS}")

@@ -70,7 +70,7 @@ controllable cycle inside ``C``; ``M`` past :data:`MAX_EXIT_NODES`.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from iterplan_compiler import limits
@@ -94,7 +94,7 @@ MIN_CHAIN_SHARE = 0.5
 MAX_EXIT_NODES = 500_000
 
 
-@dataclass
+@dataclass(frozen=True)
 class MacroGame:
     """The compressed game: ``V``, the entries and ``M`` over a third copy of the
     ``copied`` variables (:func:`modified_vars`)."""
@@ -265,6 +265,6 @@ def solve_macro(g: SymbolicGame, care: Node, assumptions: Sequence[Node],
     mg = MacroGame(g, C, V, entries, M, from_copy, copied)
     fp = gr1_winning(g.bdd, mg.cpre, [a & V for a in A], [x & V for x in goals],
                      care=V, must_contain=g.init, progress=say)
-    if fp.complete:
-        fp.winning = mg.attractor(fp.winning & V)
-    return fp
+    if not fp.complete:
+        return fp
+    return replace(fp, winning=mg.attractor(fp.winning & V))
