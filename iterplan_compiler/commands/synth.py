@@ -40,10 +40,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="BDD variable order (symbolic solver)")
     parser.add_argument("--macro", choices=[m.value for m in MacroSteps],
                         default=MacroSteps.AUTO.value,
-                        help="compress controller-only chains (e.g. a system turn of the "
-                             "SYNTECH15 translations) into macro steps where that is sound "
-                             "and pays (auto, default), or solve the full game (off); "
-                             "symbolic solver, docs/synthesis.md")
+                        help="solve a turn-based game (the SYNTECH15 translations' "
+                             "Clock/Turns) one whole turn at a time, else compress "
+                             "controller-only chains into macro steps, where that is sound "
+                             "(auto, default); only the latter (chains); or solve the full "
+                             "game (off); symbolic solver, docs/synthesis.md")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,6 +92,9 @@ def format_report(name: str, result: SynthesisResult) -> str:
                         else "")
                      + (f", |T| = {st.trans_bdd_nodes} BDD nodes over {st.bdd_vars} vars"
                         if st.trans_bdd_nodes is not None else ""))
+    if st.get("turns") == "on":
+        lines.append(f"  turn steps: solved on {st.get('turn_starts')} turn starts "
+                     f"({st.get('turn_start_nodes')} BDD nodes), one whole turn per move")
     if st.get("macro") == "on":
         lines.append(f"  macro steps: {st.get('macro_chain_states')} controller-only chain "
                      f"states compressed, {st.get('macro_v_states')} others, exit relation "

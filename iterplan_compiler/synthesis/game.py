@@ -25,6 +25,7 @@ from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame, quotient_leaves
 from iterplan_compiler.synthesis.symbolic_strategy import extract_gr1_strategy
+from iterplan_compiler.synthesis.turns import TurnSolution, solve_turns
 
 __all__ = ["SymbolicGame", "VariableOrder", "nonblocking_symbolic", "solve_symbolic", "subgame"]
 
@@ -160,26 +161,30 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
                 return ok, ctrl, why + _TOO_LARGE  # no trace past the bound anyway
             said = True
     nonblocking = spec.mode is GameMode.NONBLOCKING
-    g, reach = _game_and_reach(spec, order, stats, say, t)
+    g = _encode(spec, order, stats, t)
+    goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
+    turned = None
+    if not nonblocking and macro is MacroSteps.AUTO:
+        turned = _turns_first(g, goals, stats, say, started, said)
+        said = said or turned is not None
+    reach = _reach(g, stats, say, nonblocking)
     care = g.live if reach is None else reach
     t = time.perf_counter()
     if nonblocking:
         return _solve_nonblocking(g, care, stats, explain, name, t, say, started)
-    goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
-    fp = _fixpoint(g, care & g.live, goals, stats, say, macro)
-    W = fp.winning & care
+    W, complete, iterations = _winning(g, care, goals, turned, explain, stats, say, macro)
     stats["t_solve"] = time.perf_counter() - t
-    stats["fixpoint_iterations"] = fp.iterations
+    stats["fixpoint_iterations"] = iterations
     stats["winning_bdd_nodes"] = len(W)
     _peak(g, stats)
     if not said:
         _announce((g.init & W) != g.bdd.false, started, stats, say)
     if (g.init & W) == g.bdd.false:
-        if explain and not fp.complete:
+        if explain and not complete:
             # stopped early (must_contain): W is a superset of the winning region; the
             # explanation's counts and play need the exact one (as the explicit solver has)
             W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live).winning & care
-        return False, None, _explain_symbolic(g, care, W, explain, exact=explain or fp.complete)
+        return False, None, _explain_symbolic(g, care, W, explain, exact=explain or complete)
     if reach is not None:
         stats["winning_states"] = g.count(W)
         if kind is StrategyKind.PERMISSIVE:  # a director is far below this bound
@@ -192,13 +197,40 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     return True, ctrl, ""
 
 
+def _turns_first(g: SymbolicGame, goals: list[Any], stats: dict[str, Any],
+                 say: Callable[[str], None], started: float, said: bool
+                 ) -> TurnSolution | None:
+    """The turn game (:mod:`turns`) where it applies, its verdict said at once — before the
+    full game's reachable set, which the controller extraction still needs."""
+    t = time.perf_counter()
+    turned = solve_turns(g, g.assumptions, goals, say=say, stats=stats)
+    if turned is not None:
+        stats["t_turns"] = time.perf_counter() - t
+        if not said:
+            _announce(turned.realizable, started, stats, say)
+    return turned
+
+
+def _winning(g: SymbolicGame, care: Any, goals: list[Any], turned: TurnSolution | None,
+             explain: bool, stats: dict[str, Any], say: Callable[[str], None],
+             macro: MacroSteps) -> tuple[Any, bool, dict[str, int]]:
+    """The winning region on ``care``, whether it is exact (not a superset from a fixpoint
+    stopped early), and the fixpoint's iteration counts.  After the turn game: the full
+    region when a controller or an explanation needs it, else the turn starts' region."""
+    if turned is not None:
+        complete = turned.realizable or explain
+        return turned.full_winning(exact=complete) & care, complete, turned.iterations
+    fp = _fixpoint(g, care & g.live, goals, stats, say, macro)
+    return fp.winning & care, fp.complete, fp.iterations
+
+
 def _fixpoint(g: SymbolicGame, care: Any, goals: list[Any], stats: dict[str, Any],
               say: Callable[[str], None], macro: MacroSteps) -> Gr1Fixpoint:
     """The GR(1) fixpoint of the game on ``care``: over the compressed game
     (:func:`macro.solve_macro`) where that applies, else over the full game.  Not tried
     without the reachable set (``care`` = every live state): the chains of unreachable
     states are unstructured (GyroLTL_595 at the reach cap: no macro verdict in 90 s)."""
-    if macro is MacroSteps.AUTO and g.reach is not None:
+    if macro is not MacroSteps.OFF and g.reach is not None:
         fp = solve_macro(g, care, g.assumptions, goals, say=say, stats=stats)
         if fp is not None:
             return fp
@@ -207,16 +239,21 @@ def _fixpoint(g: SymbolicGame, care: Any, goals: list[Any], stats: dict[str, Any
                        cpre_gained=g.cpre_gained)
 
 
-def _game_and_reach(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
-                    say: Callable[[str], None], t: float) -> tuple[SymbolicGame, Any]:
-    """Encode the game, build its reachable set (None: abandoned at
-    :data:`REACH_MAX_NODES`) and restrict the framed relations to it."""
+def _encode(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
+            t: float) -> SymbolicGame:
+    """The symbolic game of ``spec`` (leaves encoded one by one)."""
     g = SymbolicGame(spec, order=order)
     stats["bdd_backend"] = type(g.bdd).__module__
     stats["order"] = order
     stats["t_encode"] = time.perf_counter() - t
+    return g
+
+
+def _reach(g: SymbolicGame, stats: dict[str, Any], say: Callable[[str], None],
+           nonblocking: bool) -> Any:
+    """The game's reachable set (None: abandoned at :data:`REACH_MAX_NODES`); the framed
+    relations are restricted to it."""
     t = time.perf_counter()
-    nonblocking = spec.mode is GameMode.NONBLOCKING
     reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
     stats["t_reach"] = time.perf_counter() - t
     if reach is not None:
@@ -229,7 +266,7 @@ def _game_and_reach(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
     stats["bdd_vars"] = len(g.bdd.vars)
     say(f"symbolic game: {stats['game_states']} reachable states, "
         f"|T| = {stats['trans_bdd_nodes']} nodes in {len(g.groups)} groups")
-    return g, reach
+    return reach
 
 
 def _announce(realizable: bool, started: float, stats: dict[str, Any],

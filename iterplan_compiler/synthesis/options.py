@@ -39,9 +39,11 @@ class VariableOrder(StrEnum):
 
 
 class MacroSteps(StrEnum):
-    """Whether the symbolic GR(1) solver compresses controller-only chains into macro steps
-    (:mod:`macro`): ``AUTO`` where its conditions hold and it pays, ``OFF`` never (the
-    full game, e.g. to measure the transform)."""
+    """Whether the symbolic GR(1) solver compresses the game: ``AUTO`` solves a turn-based
+    game turn by turn (:mod:`turns`) where its conditions hold, else compresses
+    controller-only chains into macro steps (:mod:`macro`) where those pay; ``CHAINS``
+    only the latter; ``OFF`` never (the full game, e.g. to measure the transforms)."""
 
     AUTO = "auto"
+    CHAINS = "chains"
     OFF = "off"

@@ -260,6 +260,9 @@ class SymbolicGame:
         controllability where that stays small (:func:`partition.cluster`)."""
         groups = owner_groups(self.bdd, self.vars, self.spec.components,
                               self.spec.controllable, rels)
+        #: the groups before merging: one owner set and controllability each (:mod:`turns`
+        #: needs its turn's chain and exit moves apart)
+        self.owner_groups: tuple[Group, ...] = tuple(groups)
         return cluster(self.bdd, self.vars, groups, CLUSTER_MAX_NODES)
 
     # -- operators ----------------------------------------------------------------------

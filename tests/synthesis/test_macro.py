@@ -186,22 +186,23 @@ def test_turn_structured_spec():
     model, _diags = load_model(str(TURNS_FSP))[:2]
     for name in ("Control", "Permissive"):
         prob, _ = model.synthesis_problem(name)
-        on = synthesize(prob, macro=MacroSteps.AUTO, explain=False)
+        on = synthesize(prob, macro=MacroSteps.CHAINS, explain=False)
         off = synthesize(prob, macro=MacroSteps.OFF, explain=False)
         assert on.stats["macro"] == "on"
         assert on.realizable and off.realizable
         assert bisimilar(on.controller, off.controller)
     prob, _ = model.synthesis_problem("LooseControl")
-    on = synthesize(prob, macro=MacroSteps.AUTO, explain=False)
+    on = synthesize(prob, macro=MacroSteps.CHAINS, explain=False)
     assert str(on.stats["macro"]).startswith("off")
 
 
 def test_synth_command_reports_and_switches_macro_steps(capsys):
-    """``iterc synth`` says when the macro steps were used and ``--macro off`` solves the
-    full game (same verdict, no macro line)."""
+    """``iterc synth --macro chains`` says when the macro steps were used (by default the
+    turn steps of test_turns.py take this spec) and ``--macro off`` solves the full game
+    (same verdict, no macro line)."""
     from iterplan_compiler.cli import main
 
-    assert main(["synth", str(TURNS_FSP), "Control"]) == 0
+    assert main(["synth", str(TURNS_FSP), "Control", "--macro", "chains"]) == 0
     out = capsys.readouterr().out
     assert "macro steps:" in out and "chain states compressed" in out
     assert main(["synth", str(TURNS_FSP), "Control", "--macro", "off"]) == 0

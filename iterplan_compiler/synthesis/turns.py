@@ -1,0 +1,313 @@
+"""Turn steps: the MTSA game of a turn-based translation solved one whole turn at a time.
+
+MTSA's Spectra translation (the SYNTECH15 specs) makes a synchronous game asynchronous: a
+``Clock`` lets the environment move (``Env_turn``: any uncontrolled actions, then ``tock``)
+and then the controller (``Sys_turn``: controlled actions, then ``tick``), and ``Turns(N)``
+bounds a system turn to ``N`` moves.  Every action sets one variable, so the states *inside*
+a turn are all the orders and partial assignments of that turn: GyroLTL_595 has 1,851,800
+reachable states of which 12,938 start a turn.  This module solves the game on the turn
+starts only, with a whole turn as one move, and proves that this is the same game.
+
+Equation.  ``B`` = the reachable turn starts (the initial state and every target of a turn
+exit); ``E`` / ``S`` = the states whose clock is in an environment / system turn state;
+chain groups ``h_1 … h_m`` of one side (moves that stay in the turn) in a fixed canonical
+order, exit groups ``x`` (moves that end it); ``Pre_h(Z) = ∃s'. R_h ∧ Z'``::
+
+    Esc(X)  = S ∧ B_1(B_2(… B_m(Pre_x(X)) …))          B_i(Z) = Z ∨ (S ∧ Pre_{h_i}(Z))
+    Bad(X)  = E ∧ D_1(… D_k(Pre_x(¬X) ∨ Pre_h(¬live) ∨ ¬Env) …)   D_i likewise over E
+    CPre_B(X) = B ∧ ((S ∧ Esc(X)) ∨ (E ∧ Env ∧ ¬Bad(X)))
+    W_B = the GR(1) fixpoint (fixpoint.gr1_winning) over B with CPre_B
+
+(``Esc``: the system turns the controller can finish in ``X``; ``Bad``: the environment
+turns that can end outside ``X``, in ERROR or in a dead end.)  The verdict is
+``init ∈ W_B``.  For MTSA's controller the winning region of every state is then rebuilt
+from ``W_B`` with the *exact* relations (:meth:`TurnGame.full_winning`).
+
+Why it is the same game — conditions, each checked (:func:`turn_shape.find_turns`):
+
+1. *A turn component* (the ``Clock``): one machine owns every action; each of its states
+   has only uncontrolled (``E``) or only controlled (``S``) moves; every action either
+   always stays on its side (chain) or always crosses (exit), and every partition group
+   is one kind.  So a turn is: chain moves of one player, then one exit move.
+2. *Chain moves commute and the last one wins* (checked machine by machine on the
+   explicit LTSs, ERROR moves left out, every chain action deterministic): the turn
+   groups of a side are the partition groups, those with two actions that do not commute
+   merged (``x0 ; x1`` ≠ ``x1 ; x0`` for two values of one variable whose setters sit in
+   different groups); for chain actions ``a, b`` of different turn groups, ``a;b`` and
+   ``b;a`` reach the same states of every machine; for ``a, a'`` of one system turn group
+   ``a;a'`` reaches only states ``a'`` reaches ("last wins"; an environment group where
+   it does not hold, e.g. a property that fails on ``d1`` unless ``e1`` came first, is
+   iterated to its fixpoint instead of taken once).  The product moves every machine on its own, and a shared (recoded) fluent
+   bit takes the value the action gives it in every machine, so the same holds for live
+   game states.  Hence every live path inside a turn can be reordered into the canonical
+   order of the groups, with at most one move per system group, to the same end state:
+   the states a turn can reach are exactly those of the ``B_i`` / ``D_i`` compositions.
+3. *A turn budget* (``Turns(N)``): a machine that owns every system chain and exit action
+   and no uncontrolled one, moves the same way on every chain action, has no chain cycle
+   from its initial state, but a chain path of length ``m`` (the number of system
+   groups), and returns to its initial state on every exit.  It is at its initial state
+   at every turn start, so the ``≤ m`` canonical moves always fit, and its variables can
+   be left out of the turn's states (they are projected away: states the same but for the
+   budget are one); no system turn is endless, so the controller must exit.
+4. *The goals see the same*: every assumption and goal is, on the states inside the turns
+   of one side (after ≥ 1 chain move), either false or true together with every turn
+   start of that side (absorbed, e.g. ``Tock`` inside system turns, or a goal ``TRUE``);
+   and some assumption is false inside environment turns, so an environment that never
+   ends its turn loses — which is why the compressed game may leave that choice out.
+
+Then a play of the full game is a sequence of turns, a strategy of either game translates
+to the other turn by turn (follow the canonical path the compressed strategy picks;
+conversely the end state of any turn is the end of a canonical path), and the GR(1)
+condition sees the same propositions infinitely often, so ``W_B = W ∧ B``.
+
+When it does not apply (``solve_turns`` returns None; the caller solves the full game as
+before): :class:`options.TurnSteps` ``OFF``; any condition above fails; the turn starts pass
+:data:`MAX_BOUNDARY_NODES`.  Measured in docs/synthesis.md ("Turn steps").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from iterplan_compiler import limits
+from iterplan_compiler.symbolic.bdd import and_exists, disjoin
+from iterplan_compiler.synthesis.fixpoint import Gr1Fixpoint, gr1_winning
+from iterplan_compiler.synthesis.partition import Group
+from iterplan_compiler.synthesis.symbolic_game import SymbolicGame
+from iterplan_compiler.synthesis.turn_shape import TurnShape, find_turns
+
+__all__ = ["MAX_BOUNDARY_NODES", "TurnGame", "TurnSolution", "find_turns", "solve_turns"]
+
+Node = Any
+#: give up (full game instead) once the reachable turn starts pass this many nodes
+#: (GyroLTL_595: 20.8 k, GyroLTLVar2_701: 60.9 k)
+MAX_BOUNDARY_NODES = 1_000_000
+
+
+@dataclass(frozen=True)
+class TurnGame:
+    """The game on the turn starts ``B`` (module doc); ``budget`` are the projected
+    variables, ``sys_rel`` the system groups' relations without them."""
+
+    g: SymbolicGame
+    shape: TurnShape
+    env_side: Node
+    sys_side: Node
+    budget: frozenset[str]
+    sys_rel: tuple[Node, ...]     # sys_chain + sys_exit, budget projected
+    boundary: Node
+
+    # -- images ------------------------------------------------------------------------
+
+    def _env_close(self, grp: Group, once: bool, Y: Node, *, forward: bool) -> Node:
+        """``Y`` and the environment positions one move of ``grp`` away from it (after it
+        when ``forward``, before it else) — once where the last move wins, else iterated
+        to the fixpoint (no budget bounds an environment group)."""
+        while True:
+            step = (self._post(grp, grp.rel, Y) & self.g.live if forward
+                    else self.env_side & self._pre(grp, grp.rel, Y))
+            nxt = Y | step
+            if once or nxt == Y:
+                return nxt
+            limits.check_deadline()
+            Y = nxt
+
+    def _post(self, grp: Group, rel: Node, Y: Node) -> Node:
+        b = self.g.bdd
+        return b.let(grp.unprime, and_exists(b, rel, Y, grp.cur_vars))
+
+    def _pre(self, grp: Group, rel: Node, Z: Node) -> Node:
+        b = self.g.bdd
+        return and_exists(b, rel, b.let(grp.prime, Z), grp.nxt_vars)
+
+    def _sys_groups(self) -> list[tuple[Group, Node]]:
+        s = self.shape
+        return list(zip((*s.sys_chain, *s.sys_exit), self.sys_rel, strict=True))
+
+    def turn_image(self, S: Node) -> tuple[Node, Node]:
+        """The turn starts that whole turns from ``S`` reach, and the states inside those
+        turns (budget projected)."""
+        g, b, s = self.g, self.g.bdd, self.shape
+        live = g.live
+        P = S & self.env_side
+        for grp, once in zip(s.env_chain, s.env_once, strict=True):
+            P = self._env_close(grp, once, P, forward=True)
+        Q = b.exist(self.budget, S & self.sys_side)
+        sys = self._sys_groups()
+        for grp, rel in sys[:len(s.sys_chain)]:
+            Q |= self._post(grp, rel, Q) & live
+        out = disjoin(b, [self._post(grp, grp.rel, P) for grp in s.env_exit]
+                      + [self._post(grp, rel, Q) for grp, rel in sys[len(s.sys_chain):]])
+        return out & live, P | Q
+
+    # -- the compressed game -------------------------------------------------------------
+
+    def esc(self, X: Node) -> Node:
+        """System turn positions from which the controller can end the turn in ``X``."""
+        b, s = self.g.bdd, self.shape
+        sys = self._sys_groups()
+        Z = disjoin(b, [self._pre(grp, rel, X) for grp, rel in sys[len(s.sys_chain):]])
+        Z &= self.sys_side
+        for grp, rel in reversed(sys[:len(s.sys_chain)]):
+            Z |= self.sys_side & self._pre(grp, rel, Z)
+        return Z
+
+    def bad(self, X: Node) -> Node:
+        """Environment turn positions from which the environment can end the turn outside
+        ``X``, in ERROR or in a dead end."""
+        g, b, s = self.g, self.g.bdd, self.shape
+        dead = ~g.live
+        Z = disjoin(b, [self._pre(grp, grp.rel, ~X) for grp in s.env_exit]
+                    + [self._pre(grp, grp.rel, dead) for grp in s.env_chain])
+        Z = self.env_side & (Z | ~g.env)
+        for grp, once in reversed(list(zip(s.env_chain, s.env_once, strict=True))):
+            Z = self._env_close(grp, once, Z, forward=False)
+        return Z
+
+    def cpre(self, X: Node) -> Node:
+        X &= self.boundary
+        win = (self.sys_side & self.esc(X)) | (self.env_side & self.g.env & ~self.bad(X))
+        return self.boundary & win
+
+    def full_winning(self, WB: Node) -> Node:
+        """The winning region of every live state from ``W_B``: a system turn position wins
+        iff some path of the turn ends in ``W_B``, an environment one iff none ends outside
+        it (exact relations, budget included; iterated to their fixpoints)."""
+        g, b, s = self.g, self.g.bdd, self.shape
+        Z = self.sys_side & g.pre_of(True, WB & self.env_side)
+        while True:
+            limits.check_deadline()
+            nxt = Z | (self.sys_side & disjoin(b, [self._pre(grp, grp.rel, Z)
+                                                  for grp in s.sys_chain]))
+            if nxt == Z:
+                break
+            Z = nxt
+        dead = ~g.live
+        bad = self.env_side & (~g.env | disjoin(
+            b, [self._pre(grp, grp.rel, ~WB) for grp in s.env_exit]
+            + [self._pre(grp, grp.rel, dead) for grp in s.env_chain]))
+        while True:
+            limits.check_deadline()
+            nxt = bad | (self.env_side & disjoin(b, [self._pre(grp, grp.rel, bad)
+                                                     for grp in s.env_chain]))
+            if nxt == bad:
+                break
+            bad = nxt
+        return g.live & ((self.sys_side & Z) | (self.env_side & g.env & ~bad))
+
+
+def _turn_game(g: SymbolicGame, shape: TurnShape) -> TurnGame:
+    b = g.bdd
+    vec = g.cur[shape.clock]
+    env_codes = [vec.eq(b, s) for s in sorted(shape.env_states)]
+    env_side = g.live & disjoin(b, env_codes)
+    budget = frozenset(v for k in shape.budget for v in g.cur[k].names)
+    nbudget = frozenset(g.prime[v] for v in budget)
+    rels = tuple(b.exist(budget | nbudget, grp.rel) for grp in shape.sys_chain) + \
+        tuple(b.exist(budget, grp.rel) for grp in shape.sys_exit)
+    return TurnGame(g, shape, env_side, g.live & ~env_side, budget, rels, b.false)
+
+
+def _boundary(tg: TurnGame, say: Callable[[str], None], max_nodes: int
+              ) -> tuple[Node, Node, int] | None:
+    """The reachable turn starts, the states inside their turns, the number of turns."""
+    g, b = tg.g, tg.g.bdd
+    R = frontier = g.init
+    inside = b.false
+    steps = 0
+    while frontier != b.false:
+        limits.check_deadline()
+        img, pos = tg.turn_image(frontier)
+        inside |= pos
+        frontier = img & ~R
+        R |= frontier
+        steps += 1
+        if len(R) > max_nodes:
+            say(f"turn steps: not applied (turn starts past {max_nodes} nodes)")
+            return None
+    return R, inside, steps
+
+
+def _props_ok(tg: TurnGame, R: Node, inside: Node, assumptions: Sequence[Node],
+              goals: Sequence[Node]) -> str | None:
+    """Condition 4 of the module doc, on the states inside the reachable turns."""
+    g, b, s = tg.g, tg.g.bdd, tg.shape
+    env_in = disjoin(b, [tg._post(grp, grp.rel, inside & tg.env_side)
+                         for grp in s.env_chain]) & g.live
+    sys_in = disjoin(b, [tg._post(grp, rel, inside & tg.sys_side)
+                         for grp, rel in tg._sys_groups()[:len(s.sys_chain)]]) & g.live
+    sides = ((env_in, R & tg.env_side), (sys_in, R & tg.sys_side))
+    for P in (*assumptions, *goals):
+        for inside_, starts in sides:
+            if P & inside_ != b.false and (inside_ & ~P != b.false or starts & ~P != b.false):
+                return "a GR(1) proposition holds on part of a turn only"
+    if env_in != b.false and all(A & env_in != b.false for A in assumptions or [g.live]):
+        return "an environment that never ends its turn would not lose"
+    return None
+
+
+@dataclass(frozen=True)
+class TurnSolution:
+    """The fixpoint over the turn starts and the game that gives the full region."""
+
+    game: TurnGame
+    fixpoint: Gr1Fixpoint
+    assumptions: tuple[Node, ...]
+    goals: tuple[Node, ...]
+
+    @property
+    def realizable(self) -> bool:
+        g = self.game.g
+        return (g.init & self.fixpoint.winning) != g.bdd.false
+
+    @property
+    def iterations(self) -> dict[str, int]:
+        return self.fixpoint.iterations
+
+    def full_winning(self, *, exact: bool) -> Node:
+        """The full game's winning region (:meth:`TurnGame.full_winning`), exact on every
+        reachable state; for a fixpoint stopped early (the initial state lost) only with
+        ``exact`` (the fixpoint is then run to its end first), else just ``W_B``'s superset
+        on the turn starts, enough for the verdict."""
+        fp = self.fixpoint
+        if not fp.complete:
+            if not exact:
+                return fp.winning
+            tg = self.game
+            fp = gr1_winning(tg.g.bdd, tg.cpre, self.assumptions, self.goals,
+                             care=tg.boundary)
+        return self.game.full_winning(fp.winning)
+
+
+def solve_turns(g: SymbolicGame, assumptions: Sequence[Node], goals: Sequence[Node], *,
+                say: Callable[[str], None], stats: dict[str, Any],
+                max_nodes: int = MAX_BOUNDARY_NODES) -> TurnSolution | None:
+    """The GR(1) fixpoint over the turn starts (module doc), or None where the transform
+    does not apply; ``stats["turns"]`` says which, with the sizes."""
+    shape = find_turns(g)
+    if isinstance(shape, str):
+        stats["turns"] = f"off: {shape}"
+        return None
+    tg = _turn_game(g, shape)
+    found = _boundary(tg, say, max_nodes)
+    if found is None:
+        stats["turns"] = f"off: turn starts past {max_nodes} nodes"
+        return None
+    R, inside, steps = found
+    R &= g.live
+    why = _props_ok(tg, R, inside, assumptions, goals)
+    if why is not None:
+        stats["turns"] = f"off: {why}"
+        say(f"turn steps: not applied ({why})")
+        return None
+    tg = TurnGame(tg.g, shape, tg.env_side, tg.sys_side, tg.budget, tg.sys_rel, R)
+    stats.update(turns="on", turn_starts=g.count(R), turn_start_nodes=len(R),
+                 turn_steps=steps)
+    say(f"turn steps: {stats['turn_starts']} turn starts ({len(R)} nodes) in {steps} "
+        f"turns; {len(shape.env_chain)} + {len(shape.sys_chain)} chain groups")
+    A = tuple(a & R for a in assumptions) or (R,)
+    G = tuple(x & R for x in goals)
+    fp = gr1_winning(g.bdd, tg.cpre, A, G, care=R, must_contain=g.init, progress=say)
+    return TurnSolution(tg, fp, A, G)
