@@ -167,7 +167,7 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     if not nonblocking and macro is MacroSteps.AUTO:
         turned = _turns_first(g, goals, stats, say, started, said)
         said = said or turned is not None
-    reach = _reach(g, stats, say, nonblocking)
+    reach = _reach(g, stats, say, nonblocking, turned.reachable() if turned else None)
     care = g.live if reach is None else reach
     t = time.perf_counter()
     if nonblocking:
@@ -219,7 +219,7 @@ def _winning(g: SymbolicGame, care: Any, goals: list[Any], turned: TurnSolution 
     region when a controller or an explanation needs it, else the turn starts' region."""
     if turned is not None:
         complete = turned.realizable or explain
-        return turned.full_winning(exact=complete) & care, complete, turned.iterations
+        return turned.full_winning(care, exact=complete), complete, turned.iterations
     fp = _fixpoint(g, care & g.live, goals, stats, say, macro)
     return fp.winning & care, fp.complete, fp.iterations
 
@@ -250,11 +250,14 @@ def _encode(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
 
 
 def _reach(g: SymbolicGame, stats: dict[str, Any], say: Callable[[str], None],
-           nonblocking: bool) -> Any:
-    """The game's reachable set (None: abandoned at :data:`REACH_MAX_NODES`); the framed
-    relations are restricted to it."""
+           nonblocking: bool, known: Any = None) -> Any:
+    """The game's reachable set (None: abandoned at :data:`REACH_MAX_NODES`; ``known``:
+    already built, by the turn game); the framed relations are restricted to it."""
     t = time.perf_counter()
-    reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
+    if known is not None:
+        reach = g.reach = known
+    else:
+        reach = g.reachable(max_nodes=None if nonblocking else REACH_MAX_NODES)
     stats["t_reach"] = time.perf_counter() - t
     if reach is not None:
         g.restrict(reach)

@@ -171,31 +171,51 @@ class TurnGame:
         win = (self.sys_side & self.esc(X)) | (self.env_side & self.g.env & ~self.bad(X))
         return self.boundary & win
 
-    def full_winning(self, WB: Node) -> Node:
-        """The winning region of every live state from ``W_B``: a system turn position wins
-        iff some path of the turn ends in ``W_B``, an environment one iff none ends outside
-        it (exact relations, budget included; iterated to their fixpoints)."""
+    def _closed(self, grp: Group, Y: Node, *, forward: bool, within: Node) -> Node:
+        """``Y`` and every state of ``within`` some moves of ``grp`` after (before) it,
+        exact relations (budget included)."""
+        while True:
+            limits.check_deadline()
+            step = (self._post(grp, grp.rel, Y) if forward
+                    else self._pre(grp, grp.rel, Y))
+            nxt = Y | (within & step)
+            if nxt == Y:
+                return Y
+            Y = nxt
+
+    def reachable(self) -> Node:
+        """Every reachable state of the full game: the turn starts, the states inside their
+        turns — each chain group iterated to its fixpoint in the canonical order, exact
+        relations (exact: a path inside a turn reorders into the canonical order with the
+        same moves, condition 2, and the budget moves alike on each) — and the ERROR
+        states their moves reach (ERROR has no moves), so the set is forward closed."""
+        g, s = self.g, self.shape
+        P = self.boundary & self.env_side
+        for grp in s.env_chain:
+            P = self._closed(grp, P, forward=True, within=g.live)
+        Q = self.boundary & self.sys_side
+        for grp in s.sys_chain:
+            Q = self._closed(grp, Q, forward=True, within=g.live)
+        R = self.boundary | P | Q
+        return R | (g.post(R) & g.error)
+
+    def full_winning(self, WB: Node, care: Node) -> Node:
+        """The winning region of every state of ``care`` (forward closed, e.g.
+        :meth:`reachable`) from ``W_B``: a system turn position wins iff some path of the
+        turn ends in ``W_B``, an environment one iff none ends outside it, in ERROR or in a
+        dead end.  Exact relations, each group iterated to its fixpoint, backwards through
+        the canonical order (exact as in :meth:`reachable`)."""
         g, b, s = self.g, self.g.bdd, self.shape
-        Z = self.sys_side & g.pre_of(True, WB & self.env_side)
-        while True:
-            limits.check_deadline()
-            nxt = Z | (self.sys_side & disjoin(b, [self._pre(grp, grp.rel, Z)
-                                                  for grp in s.sys_chain]))
-            if nxt == Z:
-                break
-            Z = nxt
-        dead = ~g.live
-        bad = self.env_side & (~g.env | disjoin(
+        sys_in, env_in = care & self.sys_side, care & self.env_side
+        Z = sys_in & g.pre_of(True, WB & self.env_side)
+        for grp in reversed(s.sys_chain):
+            Z = self._closed(grp, Z, forward=False, within=sys_in)
+        bad = env_in & (~g.env | disjoin(
             b, [self._pre(grp, grp.rel, ~WB) for grp in s.env_exit]
-            + [self._pre(grp, grp.rel, dead) for grp in s.env_chain]))
-        while True:
-            limits.check_deadline()
-            nxt = bad | (self.env_side & disjoin(b, [self._pre(grp, grp.rel, bad)
-                                                     for grp in s.env_chain]))
-            if nxt == bad:
-                break
-            bad = nxt
-        return g.live & ((self.sys_side & Z) | (self.env_side & g.env & ~bad))
+            + [self._pre(grp, grp.rel, ~g.live) for grp in s.env_chain]))
+        for grp in reversed(s.env_chain):
+            bad = self._closed(grp, bad, forward=False, within=env_in)
+        return g.live & care & (Z | (env_in & g.env & ~bad))
 
 
 def _turn_game(g: SymbolicGame, shape: TurnShape) -> TurnGame:
@@ -266,19 +286,23 @@ class TurnSolution:
     def iterations(self) -> dict[str, int]:
         return self.fixpoint.iterations
 
-    def full_winning(self, *, exact: bool) -> Node:
-        """The full game's winning region (:meth:`TurnGame.full_winning`), exact on every
-        reachable state; for a fixpoint stopped early (the initial state lost) only with
-        ``exact`` (the fixpoint is then run to its end first), else just ``W_B``'s superset
-        on the turn starts, enough for the verdict."""
+    def reachable(self) -> Node:
+        """The full game's reachable set (:meth:`TurnGame.reachable`)."""
+        return self.game.reachable()
+
+    def full_winning(self, care: Node, *, exact: bool) -> Node:
+        """The full game's winning region on ``care`` (:meth:`TurnGame.full_winning`); for
+        a fixpoint stopped early (the initial state lost) only with ``exact`` (the fixpoint
+        is then run to its end first), else just ``W_B``'s superset on the turn starts,
+        enough for the verdict."""
         fp = self.fixpoint
+        tg = self.game
         if not fp.complete:
             if not exact:
-                return fp.winning
-            tg = self.game
+                return fp.winning & care
             fp = gr1_winning(tg.g.bdd, tg.cpre, self.assumptions, self.goals,
                              care=tg.boundary)
-        return self.game.full_winning(fp.winning)
+        return tg.full_winning(fp.winning, care)
 
 
 def solve_turns(g: SymbolicGame, assumptions: Sequence[Node], goals: Sequence[Node], *,

@@ -140,7 +140,8 @@ def test_turns_keep_the_verdict_and_the_winning_region(prob):
         assert B <= reach and g.init <= B
         if sol.fixpoint.complete:
             assert sol.fixpoint.winning & B == full.winning & B
-        assert sol.full_winning(exact=True) & reach == full.winning & reach
+        assert sol.reachable() & g.live == reach
+        assert sol.full_winning(reach, exact=True) == full.winning & reach
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
