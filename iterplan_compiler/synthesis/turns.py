@@ -244,6 +244,7 @@ def _boundary(tg: TurnGame, say: Callable[[str], None], max_nodes: int
         frontier = img & ~R
         R |= frontier
         steps += 1
+        say(f"turn steps: {steps} turns from the start, turn starts {len(R)} nodes")
         if len(R) > max_nodes:
             say(f"turn steps: not applied (turn starts past {max_nodes} nodes)")
             return None

@@ -25,3 +25,17 @@ def fl(name: str, init: set[str], term: set[str], initially: bool = False) -> Fl
 
 def F(name: str) -> FluentProp:
     return FluentProp(name)
+
+
+def assert_same_as_full_game(prob: SynthesisProblem, macro) -> None:
+    """``prob`` solved with the compression ``macro`` (a ``MacroSteps``) and as the full
+    game: the same verdict and bisimilar controllers."""
+    from iterplan_compiler.ir.minimise import bisimilar
+    from iterplan_compiler.synthesis.driver import synthesize
+    from iterplan_compiler.synthesis.options import MacroSteps
+
+    on = synthesize(prob, macro=macro, explain=False)
+    off = synthesize(prob, macro=MacroSteps.OFF, explain=False)
+    assert on.realizable == off.realizable
+    if on.realizable:
+        assert bisimilar(on.controller, off.controller)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from synthesis_helpers import F, fl, problem
+from synthesis_helpers import F, assert_same_as_full_game, fl, problem
 from test_agreement import lts_strategy
 
 from iterplan_compiler.ir.formulas import And, Not
@@ -122,11 +122,7 @@ def test_macro_copies_only_modified_variables(prob):
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(turn_problems())
 def test_macro_keeps_verdict_and_controller(prob):
-    on = synthesize(prob, macro=MacroSteps.AUTO, explain=False)
-    off = synthesize(prob, macro=MacroSteps.OFF, explain=False)
-    assert on.realizable == off.realizable
-    if on.realizable:
-        assert bisimilar(on.controller, off.controller)
+    assert_same_as_full_game(prob, MacroSteps.CHAINS)
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

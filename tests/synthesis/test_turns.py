@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from synthesis_helpers import F, fl, problem
+from synthesis_helpers import F, assert_same_as_full_game, fl, problem
+from test_macro import _turns as macro_turns
 
 from iterplan_compiler.ir.formulas import And, Not
 from iterplan_compiler.ir.lts import ERROR, make_lts
@@ -38,10 +39,8 @@ def _clock(unc=tuple(UNC), ctrl=tuple(CTRL)):
     return make_lts("Clock", 2, trans, frozenset([*unc, *ctrl, "tick", "tock"]))
 
 
-def _turns(n, ctrl=tuple(CTRL)):
-    trans = [(n - i, a, n - i + 1) for i in range(1, n + 1) for a in ctrl]
-    trans += [(s, "tick", 0) for s in range(n + 1)]
-    return make_lts("Turns", n + 1, trans, frozenset([*ctrl, "tick"]))
+def _turns(n):
+    return macro_turns(n, tuple(CTRL))
 
 
 def _variable(name, setters):
@@ -147,11 +146,7 @@ def test_turns_keep_the_verdict_and_the_winning_region(prob):
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(turn_problems(budget=3))
 def test_turns_keep_the_controller(prob):
-    on = synthesize(prob, macro=MacroSteps.AUTO, explain=False)
-    off = synthesize(prob, macro=MacroSteps.OFF, explain=False)
-    assert on.realizable == off.realizable
-    if on.realizable:
-        assert bisimilar(on.controller, off.controller)
+    assert_same_as_full_game(prob, MacroSteps.AUTO)
 
 
 def _base(**kw):
