@@ -8,7 +8,9 @@ log; ``--map`` (the run's map) adds the grid and sensor layers.  Runs until Ctrl
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 HELP = "show a finished run (iterc run --out folder) in the mission view, with a time slider"
 
@@ -59,15 +61,21 @@ def run(args: argparse.Namespace) -> int:
         server.start()
     except OSError as exc:
         return err(f"cannot serve on {host}:{port}: {exc.strerror or exc}")
-    from iterplan_compiler.runtime.runfiles import sigterm_as_interrupt
-    from iterplan_compiler.view.live import wait
+    # SIGTERM / Ctrl-C only *set* an event, handled before the URL is announced: a client
+    # that reads the line, uses the page and terminates the viewer gets a clean exit 0
+    # wherever the signal lands (raising KeyboardInterrupt from the handler lost two races
+    # in CI: before the handler was installed, and between the print and the wait's try)
+    stop = threading.Event()
     try:
-        # SIGTERM handled before the URL is announced: a client that reads the line, uses
-        # the page and terminates the viewer gets a clean exit 0 even on a loaded machine
-        # (the handler used to be installed after the print, a race CI lost once)
-        with sigterm_as_interrupt():
-            print(f"replay view: {server.url}  (Ctrl-C to stop)", flush=True)
-            wait(args.linger)
+        old = {s: signal.signal(s, lambda _n, _f: stop.set())
+               for s in (signal.SIGTERM, signal.SIGINT)}
+    except ValueError:  # not the main thread (an embedding application)
+        old = {}
+    try:
+        print(f"replay view: {server.url}  (Ctrl-C to stop)", flush=True)
+        stop.wait(args.linger)
     finally:
         server.stop()
+        for sig, h in old.items():
+            signal.signal(sig, h)
     return 0
