@@ -125,6 +125,7 @@ class SymbolicGame:
         self._unprime_f = {n: self.bdd.var(c) for c, n in self.prime.items()}
         self.vars = Vars(self.cur, self.nxt, self.prime, self._prime_f, self._unprime_f)
         self.reach: Any = None  # set by reachable()
+        self._parts: dict[str, list[tuple[Node, frozenset[str]]]] = {}  # action_parts
         self._block_cubes: list[dict[tuple[int, ...], Node]] = [
             {} for _ in range(0, len(spec.components), CUBE_BLOCK)]
         self._build()
@@ -254,6 +255,18 @@ class SymbolicGame:
         self.assumptions = sets(spec.assumptions)
         self.guarantees = sets(spec.guarantees)
         self.failures = disjoin(b, sets(spec.failures))
+
+    def action_parts(self, action: str) -> list[tuple[Node, frozenset[str]]]:
+        """``action``'s relation as its owners' relations ``R_k^a`` with their variables
+        (current ones; the conjunction is what :func:`partition.owner_groups` builds), in
+        component order — for images with early quantification (:mod:`turns`)."""
+        if action not in self._parts:
+            comps = self.spec.components
+            self._parts[action] = [
+                (self._component_relation(k, c).get(action, self.bdd.false),
+                 frozenset(self.cur[k].names))
+                for k, c in enumerate(comps) if action in c.alphabet]
+        return self._parts[action]
 
     def _groups(self, rels: list[dict[str, Node]]) -> list[Group]:
         """The partitioned relation (:func:`partition.owner_groups`), merged per

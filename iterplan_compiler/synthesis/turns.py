@@ -68,7 +68,7 @@ before): :class:`options.TurnSteps` ``OFF``; any condition above fails; the turn
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from iterplan_compiler import limits
@@ -81,6 +81,14 @@ from iterplan_compiler.synthesis.turn_shape import TurnShape, find_turns
 __all__ = ["MAX_BOUNDARY_NODES", "TurnGame", "TurnSolution", "find_turns", "solve_turns"]
 
 Node = Any
+#: ``(relation, current variables no later cluster mentions, next ones likewise)``
+Clusters = tuple[tuple[Node, frozenset[str], frozenset[str]], ...]
+#: a system exit's relation is kept as the conjunction of clusters of its owners'
+#: relations, each cluster grown up to this many nodes, and imaged cluster by cluster with
+#: early quantification.  GyroLTLVar2_701's ``tick``: 5.5 M nodes monolithic, 3 clusters
+#: of 25 k / 31 k / 0.7 k nodes at 50 k; its turn starts' search 41 → 19 s CPU (200 k:
+#: 27 s, 600 k: 24 s; one cluster per owner, no merging: 57 s; docs/synthesis.md)
+EXIT_CLUSTER_NODES = 50_000
 #: give up (full game instead) once the reachable turn starts pass this many nodes
 #: (GyroLTL_595: 20.8 k, GyroLTLVar2_701: 60.9 k)
 MAX_BOUNDARY_NODES = 1_000_000
@@ -96,12 +104,14 @@ class TurnGame:
     env_side: Node
     sys_side: Node
     budget: frozenset[str]
-    sys_rel: tuple[Node, ...]     # sys_chain + sys_exit, budget projected
+    sys_rel: tuple[Node, ...]     # sys_chain's relations, budget projected
     boundary: Node
     #: the positions of the reachable turns after groups ``1..j`` of the canonical order
     #: (``[0]``: the turn starts; budget projected on the system side), see :meth:`esc`
     sys_stages: tuple[Node, ...] = ()
     env_stages: tuple[Node, ...] = ()
+    #: per system exit group (its actions), per action: the clusters of its relation
+    exit_clusters: dict[tuple[str, ...], tuple[Clusters, ...]] = field(default_factory=dict)
 
     # -- images ------------------------------------------------------------------------
 
@@ -127,8 +137,8 @@ class TurnGame:
         return and_exists(b, rel, b.let(grp.prime, Z), grp.nxt_vars)
 
     def _sys_groups(self) -> list[tuple[Group, Node]]:
-        s = self.shape
-        return list(zip((*s.sys_chain, *s.sys_exit), self.sys_rel, strict=True))
+        """The system chain groups with their relations, budget projected."""
+        return list(zip(self.shape.sys_chain, self.sys_rel, strict=True))
 
     def turn_image(self, S: Node) -> tuple[Node, Node]:
         """The turn starts that whole turns from ``S`` reach, and the states inside those
@@ -140,11 +150,35 @@ class TurnGame:
             P = self._env_close(grp, once, P, forward=True)
         Q = b.exist(self.budget, S & self.sys_side)
         sys = self._sys_groups()
-        for grp, rel in sys[:len(s.sys_chain)]:
+        for grp, rel in sys:
             Q |= self._post(grp, rel, Q) & live
         out = disjoin(b, [self._post(grp, grp.rel, P) for grp in s.env_exit]
-                      + [self._post(grp, rel, Q) for grp, rel in sys[len(s.sys_chain):]])
+                      + [self._exit_post(grp, Q) for grp in s.sys_exit])
         return out & live, P | Q
+
+    def _exit_post(self, grp: Group, Q: Node) -> Node:
+        """The image of ``Q`` (budget projected) by a system exit group, through its
+        clusters (:func:`exit_clusters`) with early quantification."""
+        b = self.g.bdd
+        outs = []
+        for clusters in self.exit_clusters[grp.actions]:
+            Y = Q
+            for rel, cur_done, _ in clusters:
+                Y = and_exists(b, Y, rel, cur_done)
+            outs.append(Y)
+        return b.let(grp.unprime, disjoin(b, outs))
+
+    def _exit_pre(self, grp: Group, X: Node) -> Node:
+        """The states with a move of a system exit group into ``X``, budget projected."""
+        b = self.g.bdd
+        Xn = b.let(grp.prime, X)
+        outs = []
+        for clusters in self.exit_clusters[grp.actions]:
+            Y = Xn
+            for rel, _, nxt_done in clusters:
+                Y = and_exists(b, Y, rel, nxt_done)
+            outs.append(Y)
+        return b.exist(self.budget, disjoin(b, outs))
 
     # -- the compressed game -------------------------------------------------------------
 
@@ -152,7 +186,7 @@ class TurnGame:
         """``sys_stages`` and ``env_stages`` for the turn starts ``boundary``."""
         g, b, s = self.g, self.g.bdd, self.shape
         Q = [b.exist(self.budget, self.boundary & self.sys_side)]
-        for grp, rel in self._sys_groups()[:len(s.sys_chain)]:
+        for grp, rel in self._sys_groups():
             Q.append(Q[-1] | (self._post(grp, rel, Q[-1]) & g.live))
         P = [self.boundary & self.env_side]
         for grp, once in zip(s.env_chain, s.env_once, strict=True):
@@ -170,7 +204,7 @@ class TurnGame:
         b, s = self.g.bdd, self.shape
         sys = self._sys_groups()
         m = len(s.sys_chain)
-        Z = disjoin(b, [self._pre(grp, rel, X) for grp, rel in sys[m:]])
+        Z = disjoin(b, [self._exit_pre(grp, X) for grp in s.sys_exit])
         Z &= self.sys_side
         for j in reversed(range(m)):
             grp, rel = sys[j]
@@ -245,6 +279,25 @@ class TurnGame:
         return g.live & care & (Z | (env_in & g.env & ~bad))
 
 
+def exit_clusters(g: SymbolicGame, action: str, limit: int = EXIT_CLUSTER_NODES
+                  ) -> Clusters:
+    """``action``'s relation as clusters: its owners' relations conjoined in component
+    order while the product stays under ``limit`` nodes; each with the current and next
+    variables that no later cluster mentions (quantified right after it)."""
+    groups: list[tuple[Node, set[str]]] = []
+    for rel, cur in g.action_parts(action):
+        if groups and len(prod := groups[-1][0] & rel) <= limit:
+            groups[-1] = (prod, groups[-1][1] | cur)
+        else:
+            groups.append((rel, set(cur)))
+    last = {v: i for i, (_, vs) in enumerate(groups) for v in vs}
+    out = []
+    for i, (rel, vs) in enumerate(groups):
+        done = frozenset(v for v in vs if last[v] == i)
+        out.append((rel, done, frozenset(g.prime[v] for v in done)))
+    return tuple(out)
+
+
 def _turn_game(g: SymbolicGame, shape: TurnShape) -> TurnGame:
     b = g.bdd
     vec = g.cur[shape.clock]
@@ -252,9 +305,11 @@ def _turn_game(g: SymbolicGame, shape: TurnShape) -> TurnGame:
     env_side = g.live & disjoin(b, env_codes)
     budget = frozenset(v for k in shape.budget for v in g.cur[k].names)
     nbudget = frozenset(g.prime[v] for v in budget)
-    rels = tuple(b.exist(budget | nbudget, grp.rel) for grp in shape.sys_chain) + \
-        tuple(b.exist(budget, grp.rel) for grp in shape.sys_exit)
-    return TurnGame(g, shape, env_side, g.live & ~env_side, budget, rels, b.false)
+    rels = tuple(b.exist(budget | nbudget, grp.rel) for grp in shape.sys_chain)
+    clusters = {grp.actions: tuple(exit_clusters(g, a) for a in grp.actions)
+                for grp in shape.sys_exit}
+    return TurnGame(g, shape, env_side, g.live & ~env_side, budget, rels, b.false,
+                    exit_clusters=clusters)
 
 
 def _boundary(tg: TurnGame, say: Callable[[str], None], max_nodes: int
@@ -285,7 +340,7 @@ def _props_ok(tg: TurnGame, R: Node, inside: Node, assumptions: Sequence[Node],
     env_in = disjoin(b, [tg._post(grp, grp.rel, inside & tg.env_side)
                          for grp in s.env_chain]) & g.live
     sys_in = disjoin(b, [tg._post(grp, rel, inside & tg.sys_side)
-                         for grp, rel in tg._sys_groups()[:len(s.sys_chain)]]) & g.live
+                         for grp, rel in tg._sys_groups()]) & g.live
     sides = ((env_in, R & tg.env_side), (sys_in, R & tg.sys_side))
     for P in (*assumptions, *goals):
         for inside_, starts in sides:
@@ -354,7 +409,7 @@ def solve_turns(g: SymbolicGame, assumptions: Sequence[Node], goals: Sequence[No
         stats["turns"] = f"off: {why}"
         say(f"turn steps: not applied ({why})")
         return None
-    tg = TurnGame(tg.g, shape, tg.env_side, tg.sys_side, tg.budget, tg.sys_rel, R)
+    tg = replace(tg, boundary=R)
     sys_stages, env_stages = tg.stages()
     tg = replace(tg, sys_stages=sys_stages, env_stages=env_stages)
     stats.update(turns="on", turn_starts=g.count(R), turn_start_nodes=len(R),
