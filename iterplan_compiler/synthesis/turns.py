@@ -165,28 +165,27 @@ class TurnGame:
         return out & live, P | Q
 
     def _exit_post(self, grp: Group, Q: Node) -> Node:
-        """The image of ``Q`` (budget projected) by a system exit group, through its
-        clusters (:func:`exit_clusters`) with early quantification."""
-        b = self.g.bdd
-        outs = []
-        for clusters in self.exit_clusters[grp.actions]:
-            Y = Q
-            for rel, cur_done, _ in clusters:
-                Y = and_exists(b, Y, rel, cur_done)
-            outs.append(Y)
-        return b.let(grp.unprime, disjoin(b, outs))
+        """The image of ``Q`` (budget projected) by a system exit group."""
+        return self.g.bdd.let(grp.unprime, self._through_exit(grp, Q, forward=True))
 
     def _exit_pre(self, grp: Group, X: Node) -> Node:
         """The states with a move of a system exit group into ``X``, budget projected."""
         b = self.g.bdd
-        Xn = b.let(grp.prime, X)
+        Y = self._through_exit(grp, b.let(grp.prime, X), forward=False)
+        return b.exist(self.budget, Y)
+
+    def _through_exit(self, grp: Group, Y: Node, *, forward: bool) -> Node:
+        """``Y`` conjoined with each action's clusters (:func:`exit_clusters`) in turn,
+        each cluster's last current (``forward``) or next variables quantified right after
+        it; the union over the group's actions."""
+        b = self.g.bdd
         outs = []
         for clusters in self.exit_clusters[grp.actions]:
-            Y = Xn
-            for rel, _, nxt_done in clusters:
-                Y = and_exists(b, Y, rel, nxt_done)
-            outs.append(Y)
-        return b.exist(self.budget, disjoin(b, outs))
+            Z = Y
+            for rel, cur_done, nxt_done in clusters:
+                Z = and_exists(b, Z, rel, cur_done if forward else nxt_done)
+            outs.append(Z)
+        return disjoin(b, outs)
 
     # -- the compressed game -------------------------------------------------------------
 
