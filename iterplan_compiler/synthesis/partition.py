@@ -42,27 +42,71 @@ class Vars:
         return frozenset(self.prime.values())
 
 
+#: an action's relation (its owners' relations conjoined in component order) is *deferred* —
+#: kept as its factors and built only when first read — once it passes this many nodes while
+#: being built.  GyroLTLVar2_701's ``tick`` (49 owners) has 5.5 M nodes and took 19 s of the
+#: encoding; the turn game (:mod:`turns`) images it through clusters of its owners' relations
+#: and never reads it, so its verdict no longer waits for it.  Above
+#: :data:`symbolic_game.CLUSTER_MAX_NODES`, so a deferred group is never worth merging.
+DEFER_NODES = 500_000
+
+
 @dataclass
 class Group:
-    """Actions sharing owners and controllability: ``rel`` over the owners' cur/next bits."""
+    """Actions sharing owners and controllability: ``rel`` over the owners' cur/next bits.
+
+    ``rel`` is ``built`` (the actions built at once) or'ed with, per *deferred* action
+    (:data:`DEFER_NODES`), the conjunction of its ``factors``, computed on first read."""
 
     owners: tuple[int, ...]
     controllable: bool
     actions: tuple[str, ...]
-    rel: Node
+    built: Node
     nxt_vars: frozenset[str]
     cur_vars: frozenset[str]
     prime: dict[str, Node]     # owner cur var -> next var node (for ``let``)
     unprime: dict[str, Node]   # owner next var -> cur var node
+    factors: tuple[tuple[Node, ...], ...] = ()
+
+    @property
+    def deferred(self) -> bool:
+        return bool(self.factors)
+
+    @property
+    def rel(self) -> Node:
+        if self.factors:
+            self.built = self.within()
+            self.factors = ()
+        return self.built
+
+    @rel.setter
+    def rel(self, value: Node) -> None:
+        self.built, self.factors = value, ()
+
+    def within(self, *cares: Node) -> Node:
+        """``rel ∧ cares…``, conjoined one by one (a set and its primed copy conjoined
+        first can be far larger than either: interleaved variables); a deferred action is
+        built from the first care set on, its factors next, the other care sets last (so
+        every intermediate product is already restricted)."""
+        out = self.built
+        for c in cares:
+            out &= c
+        for fs in self.factors:
+            r = self.built.bdd.true
+            for f in (*cares[:1], *fs, *cares[1:]):
+                r &= f
+            out |= r
+        return out
 
 
 def group_over(v: Vars, owners: tuple[int, ...], controllable: bool,
-               actions: tuple[str, ...], rel: Node) -> Group:
+               actions: tuple[str, ...], rel: Node,
+               factors: tuple[tuple[Node, ...], ...] = ()) -> Group:
     """A :class:`Group` of ``owners`` (their variables, shared ones included)."""
     cv = [x for k in owners for x in v.cur[k].names]
     nv = [x for k in owners for x in v.nxt[k].names]
     return Group(owners, controllable, actions, rel, frozenset(nv), frozenset(cv),
-                 {c: v.prime_f[c] for c in cv}, {n: v.unprime_f[n] for n in nv})
+                 {c: v.prime_f[c] for c in cv}, {n: v.unprime_f[n] for n in nv}, factors)
 
 
 def owner_groups(bdd: Any, v: Vars, comps: Sequence[LTS], controllable: frozenset[str],
@@ -75,21 +119,30 @@ def owner_groups(bdd: Any, v: Vars, comps: Sequence[LTS], controllable: frozense
         for a in sorted(c.alphabet - {TAU}):
             owner_lists.setdefault(a, []).append(k)
     parts: dict[tuple[tuple[int, ...], bool], list[tuple[str, Node]]] = {}
+    later: dict[tuple[tuple[int, ...], bool], list[tuple[Node, ...]]] = {}
     for a, ks_list in sorted(owner_lists.items()):
+        key = (tuple(ks_list), a in controllable)
+        fs = [rels[k].get(a, bdd.false) for k in ks_list]
         r = bdd.true
-        for k in ks_list:
-            r &= rels[k].get(a, bdd.false)
+        for i, f in enumerate(fs):
+            r &= f
             if r == bdd.false:
                 break
-        parts.setdefault((tuple(ks_list), a in controllable), []).append((a, r))
+            if len(r) > DEFER_NODES and i + 1 < len(fs):
+                later.setdefault(key, []).append((r, *fs[i + 1:]))
+                parts.setdefault(key, [])
+                r = None
+                break
+        parts.setdefault(key, []).append((a, bdd.false if r is None else r))
     for k, comp_rel in enumerate(rels):
         if TAU in comp_rel:
             parts.setdefault(((k,), False), []).append((TAU, comp_rel[TAU]))
     out: list[Group] = []
     for (ks, is_ctrl), acts in parts.items():
         rel = disjoin(bdd, [r for _, r in acts])
-        if rel != bdd.false:
-            out.append(group_over(v, ks, is_ctrl, tuple(a for a, _ in acts), rel))
+        factors = tuple(later.get((ks, is_ctrl), ()))
+        if rel != bdd.false or factors:
+            out.append(group_over(v, ks, is_ctrl, tuple(a for a, _ in acts), rel, factors))
     return out
 
 
@@ -137,6 +190,8 @@ def cluster(bdd: Any, v: Vars, groups: list[Group], max_nodes: int) -> list[Grou
             continue
         rel = bdd.false
         for g in part:
+            if g.deferred:  # over DEFER_NODES ≥ max_nodes: not built for this
+                break
             rel |= g.rel & framed_to(bdd, v, g.cur_vars)
             if len(rel) > max_nodes:
                 break

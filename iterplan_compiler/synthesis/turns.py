@@ -66,7 +66,11 @@ CPU); one backward step per group where the last move wins (condition 2); every 
 step simplified to the positions the reachable turns have at that stage (:meth:`TurnGame.esc`:
 a position of stage ``j`` moves by group ``j`` into stage ``j + 1``; GyroLTLVar2_701's ``Esc``
 16.7 → 1.2 s); the system exit imaged through clusters of its owners' relations
-(:func:`exit_clusters`; 701's turn starts 41 → 19 s).
+(:func:`exit_clusters`; 701's turn starts 41 → 19 s), each into live codes only
+(:meth:`SymbolicGame.action_parts`: its images had up to 2.3 M nodes, 13 k of them live;
+then 26 → 6 s on a slower machine); condition 4 checked on the positions the turn images
+reached (not imaged again: 5.6 s).  The exit's monolithic relation is never read here (it is
+deferred, :data:`partition.DEFER_NODES`: 701's 5.5 M-node ``tick`` cost 19 s to build).
 
 When it does not apply (``solve_turns`` returns None; the caller solves the full game as
 before): :class:`options.MacroSteps` ``CHAINS`` or ``OFF``; any condition above fails; the
@@ -95,7 +99,8 @@ Clusters = tuple[tuple[Node, frozenset[str], frozenset[str]], ...]
 #: relations, each cluster grown up to this many nodes, and imaged cluster by cluster with
 #: early quantification.  GyroLTLVar2_701's ``tick``: 5.5 M nodes monolithic, 3 clusters
 #: of 25 k / 31 k / 0.7 k nodes at 50 k; its turn starts' search 41 → 19 s CPU (200 k:
-#: 27 s, 600 k: 24 s; one cluster per owner, no merging: 57 s; docs/synthesis.md)
+#: 27 s, 600 k: 24 s; one cluster per owner, no merging: 57 s; measured before the
+#: clusters moved into live codes only; docs/synthesis.md)
 EXIT_CLUSTER_NODES = 50_000
 #: give up (full game instead) once the reachable turn starts pass this many nodes
 #: (GyroLTL_595: 20.8 k, GyroLTLVar2_701: 60.9 k)
@@ -127,12 +132,20 @@ class TurnGame:
         """``Y`` and the environment positions one move of ``grp`` away from it (after it
         when ``forward``, before it else) — once where the last move wins, else iterated
         to the fixpoint (no budget bounds an environment group)."""
+        return self._env_steps(grp, once, Y, forward=forward)[0]
+
+    def _env_steps(self, grp: Group, once: bool, Y: Node, *, forward: bool
+                   ) -> tuple[Node, Node]:
+        """:meth:`_env_close` and the positions its moves reached (the union of its
+        steps)."""
+        moved = self.g.bdd.false
         while True:
             step = (self._post(grp, grp.rel, Y) & self.g.live if forward
                     else self.env_side & self._pre(grp, grp.rel, Y))
+            moved |= step
             nxt = Y | step
             if once or nxt == Y:
-                return nxt
+                return nxt, moved
             limits.check_deadline()
             Y = nxt
 
@@ -149,20 +162,25 @@ class TurnGame:
         return list(zip(self.shape.sys_chain, self.sys_rel, strict=True))
 
     def turn_image(self, S: Node) -> tuple[Node, Node]:
-        """The turn starts that whole turns from ``S`` reach, and the states inside those
-        turns (budget projected)."""
+        """The turn starts that whole turns from ``S`` reach, and the positions inside
+        those turns after at least one chain move (budget projected; in the canonical order,
+        which reaches every such position by condition 2)."""
         g, b, s = self.g, self.g.bdd, self.shape
         live = g.live
         P = S & self.env_side
+        moved = b.false
         for grp, once in zip(s.env_chain, s.env_once, strict=True):
-            P = self._env_close(grp, once, P, forward=True)
+            P, step = self._env_steps(grp, once, P, forward=True)
+            moved |= step
         Q = b.exist(self.budget, S & self.sys_side)
         sys = self._sys_groups()
         for grp, rel in sys:
-            Q |= self._post(grp, rel, Q) & live
+            step = self._post(grp, rel, Q) & live
+            moved |= step
+            Q |= step
         out = disjoin(b, [self._post(grp, grp.rel, P) for grp in s.env_exit]
                       + [self._exit_post(grp, Q) for grp in s.sys_exit])
-        return out & live, P | Q
+        return out & live, moved
 
     def _exit_post(self, grp: Group, Q: Node) -> Node:
         """The image of ``Q`` (budget projected) by a system exit group."""
@@ -321,15 +339,16 @@ def _turn_game(g: SymbolicGame, shape: TurnShape) -> TurnGame:
 
 def _boundary(tg: TurnGame, say: Callable[[str], None], max_nodes: int
               ) -> tuple[Node, Node, int] | None:
-    """The reachable turn starts, the states inside their turns, the number of turns."""
+    """The reachable turn starts, the positions inside their turns after at least one chain
+    move (:meth:`TurnGame.turn_image`), the number of turns."""
     g, b = tg.g, tg.g.bdd
     R = frontier = g.init
     inside = b.false
     steps = 0
     while frontier != b.false:
         limits.check_deadline()
-        img, pos = tg.turn_image(frontier)
-        inside |= pos
+        img, moved = tg.turn_image(frontier)
+        inside |= moved
         frontier = img & ~R
         R |= frontier
         steps += 1
@@ -342,12 +361,11 @@ def _boundary(tg: TurnGame, say: Callable[[str], None], max_nodes: int
 
 def _props_ok(tg: TurnGame, R: Node, inside: Node, assumptions: Sequence[Node],
               goals: Sequence[Node]) -> str | None:
-    """Condition 4 of the module doc, on the states inside the reachable turns."""
-    g, b, s = tg.g, tg.g.bdd, tg.shape
-    env_in = disjoin(b, [tg._post(grp, grp.rel, inside & tg.env_side)
-                         for grp in s.env_chain]) & g.live
-    sys_in = disjoin(b, [tg._post(grp, rel, inside & tg.sys_side)
-                         for grp, rel in tg._sys_groups()]) & g.live
+    """Condition 4 of the module doc, on the positions ``inside`` the reachable turns after
+    at least one chain move (collected while the turns were imaged: GyroLTLVar2_701's
+    check took 5.6 s CPU when it imaged them again)."""
+    g, b = tg.g, tg.g.bdd
+    env_in, sys_in = inside & tg.env_side, inside & tg.sys_side
     sides = ((env_in, R & tg.env_side), (sys_in, R & tg.sys_side))
     for P in (*assumptions, *goals):
         for inside_, starts in sides:
