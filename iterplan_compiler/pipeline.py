@@ -258,6 +258,8 @@ class SynthesisOptions:
     order: VariableOrder = VariableOrder.CLUSTERED
     macro: MacroSteps = MacroSteps.AUTO
     progress: Callable[[str], None] | None = field(default=None, compare=False)
+    #: stop at the verdict: no controller (``iterc synth --realizability-only``)
+    realizability_only: bool = False
 
 
 @dataclass(frozen=True)
@@ -284,7 +286,8 @@ def synthesise(posed: Posed, options: SynthesisOptions = SynthesisOptions()) -> 
     result = synthesis_driver.synthesize(problem, solver=options.solver,
                                          progress=options.progress, explain=options.explain,
                                          order=options.order,
-                                         macro=options.macro)
+                                         macro=options.macro,
+                                         realizability_only=options.realizability_only)
     diags = [*posed.diagnostics, *result.diagnostics]
     for text in result.stats.warnings:
         diags.append(warning(W_SYNTHESIS, text, problem.span))

@@ -1,13 +1,18 @@
-"""``iterc synth SPEC [COMPOSITE] [--solver symbolic|explicit] [--explain]``.
+"""``iterc synth SPEC [COMPOSITE] [--solver symbolic|explicit] [--explain]
+[--realizability-only] [-v|-q]``.
 
 Prints the verdict (realizable / unrealizable), game and controller sizes and the time of each
-phase.  Exit codes: 0 realizable, 1 unrealizable or errors in SPEC, 2 usage.
+phase; the solver's progress (phases, fixpoint iterations, the verdict as soon as it is known)
+goes to stderr with the elapsed seconds when stderr is a terminal or with ``-v``.  Exit codes:
+0 realizable, 1 unrealizable or errors in SPEC, 2 usage.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
+from collections.abc import Callable
 
 from iterplan_compiler import pipeline
 from iterplan_compiler.diagnostics import Diagnostic, render
@@ -45,6 +50,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "controller-only chains into macro steps, where that is sound "
                              "(auto, default); only the latter (chains); or solve the full "
                              "game (off); symbolic solver, docs/synthesis.md")
+    parser.add_argument("--realizability-only", action="store_true",
+                        help="stop at the verdict: build no controller (SYNTECH15's large "
+                             "games decide in seconds, their controllers take minutes)")
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="store_true",
+                      help="print the solver's progress on stderr (default when stderr is "
+                           "a terminal)")
+    talk.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,7 +81,9 @@ def run(args: argparse.Namespace) -> int:
         print(render(posed.diagnostics, elab.sources), file=sys.stderr)
     options = pipeline.SynthesisOptions(Solver(args.solver), explain=args.explain,
                                         order=VariableOrder(args.order),
-                                        macro=MacroSteps(args.macro))
+                                        macro=MacroSteps(args.macro),
+                                        progress=_progress(args),
+                                        realizability_only=args.realizability_only)
     synth = pipeline.synthesise(posed, options)
     result = synth.result
     if result is None:
@@ -79,6 +94,18 @@ def run(args: argparse.Namespace) -> int:
     if not result.realizable and args.explain and result.explanation:
         print(result.explanation)
     return 0 if result.realizable else 1
+
+
+def _progress(args: argparse.Namespace) -> Callable[[str], None] | None:
+    """Progress lines on stderr (``[12.3 s] …``, seconds since the solve began), or None."""
+    if args.quiet or not (args.verbose or sys.stderr.isatty()):
+        return None
+    start = time.perf_counter()
+
+    def say(msg: str) -> None:
+        print(f"[{time.perf_counter() - start:7.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    return say
 
 
 def format_report(name: str, result: SynthesisResult) -> str:
@@ -99,7 +126,9 @@ def format_report(name: str, result: SynthesisResult) -> str:
         lines.append(f"  macro steps: {st.get('macro_chain_states')} controller-only chain "
                      f"states compressed, {st.get('macro_v_states')} others, exit relation "
                      f"{st.get('macro_exit_nodes')} BDD nodes")
-    if result.realizable:
+    if result.realizable and result.controller is None:
+        lines.append("  controller: not built (--realizability-only)")
+    elif result.realizable:
         what = "controller (director)" if st.strategy is StrategyKind.DIRECTOR else "controller"
         lines.append(f"  {what}: {st.controller_states} states, "
                      f"{st.controller_transitions} transitions; controlled system "

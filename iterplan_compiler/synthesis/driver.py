@@ -118,7 +118,8 @@ class SynthesisStats(Mapping[str, object]):
 class SynthesisResult:
     """Outcome of :func:`synthesize`.
 
-    ``controller`` — the (minimised) controller LTS over the plant alphabet, or None;
+    ``controller`` — the (minimised) controller LTS over the plant alphabet, or None
+    (unrealizable, or ``realizability_only``);
     ``composition`` — ``controller ∥ other body machines ∥ safety machines`` named like the
     composite (None when unrealizable); ``explanation`` — human-readable reason when
     unrealizable (empty otherwise); ``stats`` — sizes and per-phase seconds;
@@ -151,6 +152,7 @@ def synthesize(
     max_states: int | None = 2_000_000,
     order: VariableOrder | str = VariableOrder.CLUSTERED,
     macro: MacroSteps = MacroSteps.AUTO,
+    realizability_only: bool = False,
 ) -> SynthesisResult:
     """Solve ``problem`` (§3) and build its controller; never raises for bad specs.
 
@@ -158,7 +160,10 @@ def synthesize(
     both give the same verdict and the same controller.  ``order`` selects the symbolic
     variable order (:class:`VariableOrder`, see :mod:`symbolic_game`).  Both are converted
     to their enums here; the stages below take the enums only.  ``macro``: the symbolic
-    solver's macro steps (:mod:`macro`; ``MacroSteps.OFF`` solves the full game).  Stats
+    solver's macro steps (:mod:`macro`; ``MacroSteps.OFF`` solves the full game).
+    ``realizability_only``: stop at the verdict — a realizable result then has no
+    controller (``iterc synth --realizability-only``; an unrealizable one is explained as
+    usual).  Stats
     keys: ``game_states``, ``plant_states`` (explicit) / ``bdd_nodes`` (symbolic),
     ``controller_states``, ``t_<phase>`` seconds; ``macro*`` with the macro steps.
     """
@@ -166,7 +171,7 @@ def synthesize(
         raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVERS}")
     stats: dict[str, Any] = {"solver": Solver(solver)}
     result = _synthesize(problem, Solver(solver), progress, explain, minimise, max_states,
-                         VariableOrder(order), stats, MacroSteps(macro))
+                         VariableOrder(order), stats, MacroSteps(macro), realizability_only)
     return SynthesisResult(result.realizable, result.controller, result.composition,
                            result.explanation, SynthesisStats.from_dict(stats),
                            result.diagnostics)
@@ -184,7 +189,7 @@ class _Outcome:
 def _synthesize(problem: SynthesisProblem, solver: Solver,
                 progress: Callable[[str], None] | None, explain: bool, minimise: bool,
                 max_states: int | None, order: VariableOrder, stats: dict[str, Any],
-                macro: MacroSteps = MacroSteps.AUTO) -> _Outcome:
+                macro: MacroSteps = MacroSteps.AUTO, verdict_only: bool = False) -> _Outcome:
     say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
     try:
@@ -205,19 +210,23 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
         # §3.6 `permissive`: both solvers end in strategy.extract_controller
         if solver is Solver.EXPLICIT:
             result = _solve_explicit(spec, stats, say, max_states, explain, name,
-                                     permissive=problem.permissive, kind=kind)
+                                     permissive=problem.permissive, kind=kind,
+                                     verdict_only=verdict_only)
         else:
             from iterplan_compiler.synthesis.game import solve_symbolic
 
             result = solve_symbolic(spec, stats, say, explain=explain, name=name,
                                     order=order, permissive=problem.permissive,
-                                    started=t0, kind=kind, macro=macro)
+                                    started=t0, kind=kind, macro=macro,
+                                    verdict_only=verdict_only)
     except _explicit.StateExplosion as e:
         msg = f"the game has too many states for the explicit solver ({e})"
         return _Outcome(False, None, None, msg, (error("E0908", msg, problem.span),))
     realizable, controller, explanation = result
-    if not realizable or controller is None:
+    if not realizable:
         return _Outcome(False, None, None, explanation)
+    if controller is None:  # verdict_only
+        return _Outcome(True, None, None, "")
     t1 = time.perf_counter()
     if minimise:
         controller = _minimise(controller)
@@ -239,8 +248,8 @@ def _synthesize(problem: SynthesisProblem, solver: Solver,
 
 def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], None],
                     max_states: int | None, explain: bool, name: str, *,
-                    permissive: bool = False, kind: StrategyKind = StrategyKind.PERMISSIVE
-                    ) -> tuple[bool, LTS | None, str]:
+                    permissive: bool = False, kind: StrategyKind = StrategyKind.PERMISSIVE,
+                    verdict_only: bool = False) -> tuple[bool, LTS | None, str]:
     t = time.perf_counter()
     game = _explicit.build_game(spec, max_states=max_states)
     stats["game_states"] = game.num_states
@@ -256,6 +265,8 @@ def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], 
         stats["winning_states"] = len(region)
         if game.initial not in region:
             return False, None, _explain(spec, game, region, explain)
+        if verdict_only:
+            return True, None, ""
         t = time.perf_counter()
         ctrl = extract_director(game, region, marked, name, alphabet)
         stats["t_extract"] = time.perf_counter() - t
@@ -266,6 +277,8 @@ def _solve_explicit(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], 
     stats["winning_states"] = len(win)
     if not ranks.winning(game.initial):
         return False, None, _explain(spec, game, win, explain)
+    if verdict_only:
+        return True, None, ""
     t = time.perf_counter()
     ctrl = extract_controller(game, ranks, name, alphabet, permissive=permissive, kind=kind)
     stats["t_extract"] = time.perf_counter() - t

@@ -122,7 +122,8 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
                    permissive: bool = False, quotient: bool = True,
                    started: float | None = None,
                    kind: StrategyKind = StrategyKind.PERMISSIVE,
-                   macro: MacroSteps = MacroSteps.AUTO
+                   macro: MacroSteps = MacroSteps.AUTO,
+                   verdict_only: bool = False
                    ) -> tuple[bool, LTS | None, str]:
     """Symbolic solve + MTSA controller extraction; returns (realizable, controller, why).
 
@@ -136,24 +137,19 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     verdict is reported through ``say`` as soon as the fixpoint decides it
     (:func:`_announce`), before the controller is extracted.  ``kind``: MTSA's controller
     or the GR(1) director (:mod:`symbolic_strategy`); ``macro``: compress controller-only
-    chains (:mod:`macro`) where that applies."""
+    chains (:mod:`macro`) where that applies; ``verdict_only``: stop at the verdict (no
+    controller: ``(True, None, "")``; an unrealizable game is still explained with
+    ``explain``)."""
     t = time.perf_counter()
     started = t if started is None else started
     said = False  # the verdict was said by the quotiented solve below
     if quotient and spec.mode is GameMode.GR1:  # the director (§3.9) is ranked explicitly as is
-        qspec = quotient_leaves(spec)
-        if qspec is not spec:
-            stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
-            stats["body_quotient_states"] = [c.num_states
-                                             for c in qspec.components[:_nbody(spec)]]
-        if order is VariableOrder.CLUSTERED:
-            # fluent-aligned codes, shared fluent variables (recode.py): the same game
-            qspec = recode_leaves(qspec)
+        qspec = _quotiented(spec, order, stats)
         if qspec is not spec:
             ok, ctrl, why = solve_symbolic(qspec, stats, say, explain=False, name=name,
                                            order=order, permissive=permissive,
                                            quotient=False, started=started,
-                                           kind=kind, macro=macro)
+                                           kind=kind, macro=macro, verdict_only=verdict_only)
             states = stats.get("game_states")
             if ok or not explain:
                 return ok, ctrl, why
@@ -167,11 +163,14 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     if not nonblocking and macro is MacroSteps.AUTO:
         turned = _turns_first(g, goals, stats, say, started, said)
         said = said or turned is not None
+        if turned is not None and verdict_only and (turned.realizable or not explain):
+            return turned.realizable, None, "" if turned.realizable else _uncounted()
     reach = _reach(g, stats, say, nonblocking, turned.reachable() if turned else None)
     care = g.live if reach is None else reach
     t = time.perf_counter()
     if nonblocking:
-        return _solve_nonblocking(g, care, stats, explain, name, t, say, started)
+        return _solve_nonblocking(g, care, stats, explain, name, t, say, started,
+                                  verdict_only)
     W, complete, iterations = _winning(g, care, goals, turned, explain, stats, say, macro)
     stats["t_solve"] = time.perf_counter() - t
     stats["fixpoint_iterations"] = iterations
@@ -180,21 +179,50 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
     if not said:
         _announce((g.init & W) != g.bdd.false, started, stats, say)
     if (g.init & W) == g.bdd.false:
-        if explain and not complete:
-            # stopped early (must_contain): W is a superset of the winning region; the
-            # explanation's counts and play need the exact one (as the explicit solver has)
-            W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live).winning & care
-        return False, None, _explain_symbolic(g, care, W, explain, exact=explain or complete)
+        return False, None, _lost(g, care, W, goals, explain, complete)
     if reach is not None:
         stats["winning_states"] = g.count(W)
-        if kind is StrategyKind.PERMISSIVE:  # a director is far below this bound
+        if kind is StrategyKind.PERMISSIVE and not verdict_only:  # (a director: far below)
             _check_controller_bound(stats["winning_states"] * len(goals), name)
+    if verdict_only:
+        return True, None, ""
     t = time.perf_counter()
     ctrl = extract_gr1_strategy(g, W, name, spec.alphabet, kind, permissive=permissive,
                                 progress=say)
     stats["t_extract"] = time.perf_counter() - t
     _peak(g, stats)
     return True, ctrl, ""
+
+
+def _lost(g: SymbolicGame, care: Any, W: Any, goals: list[Any], explain: bool,
+          complete: bool) -> str:
+    """An unrealizable verdict's message (and, with ``explain``, the play)."""
+    if explain and not complete:
+        # stopped early (must_contain): W is a superset of the winning region; the
+        # explanation's counts and play need the exact one (as the explicit solver has)
+        W = gr1_winning(g.bdd, g.cpre, g.assumptions, goals, care=care & g.live).winning & care
+    return _explain_symbolic(g, care, W, explain, exact=explain or complete)
+
+
+def _quotiented(spec: GameSpec, order: VariableOrder, stats: dict[str, Any]) -> GameSpec:
+    """``spec`` with its body machines' quotients and (``clustered``) fluent-aligned codes
+    (:func:`solve_symbolic`); ``spec`` itself where neither changes anything."""
+    qspec = quotient_leaves(spec)
+    if qspec is not spec:
+        stats["body_states"] = [c.num_states for c in spec.components[:_nbody(spec)]]
+        stats["body_quotient_states"] = [c.num_states
+                                         for c in qspec.components[:_nbody(spec)]]
+    if order is VariableOrder.CLUSTERED:
+        # fluent-aligned codes, shared fluent variables (recode.py): the same game
+        qspec = recode_leaves(qspec)
+    return qspec
+
+
+def _uncounted() -> str:
+    """An unrealizable verdict's message when the losing states were not counted."""
+    from iterplan_compiler.synthesis.explain import losing_head
+
+    return losing_head(None, None)
 
 
 def _turns_first(g: SymbolicGame, goals: list[Any], stats: dict[str, Any],
@@ -314,8 +342,8 @@ def _check_controller_bound(bound: int, name: str) -> None:
 
 
 def _solve_nonblocking(g: SymbolicGame, reach: Any, stats: dict[str, Any], explain: bool,
-                       name: str, t: float, say: Callable[[str], None], started: float
-                       ) -> tuple[bool, LTS | None, str]:
+                       name: str, t: float, say: Callable[[str], None], started: float,
+                       verdict_only: bool = False) -> tuple[bool, LTS | None, str]:
     marked = g.guarantees[0] & reach
     W = nonblocking_symbolic(g, reach, marked)
     stats["t_solve"] = time.perf_counter() - t
@@ -323,6 +351,8 @@ def _solve_nonblocking(g: SymbolicGame, reach: Any, stats: dict[str, Any], expla
     _announce((g.init & W) != g.bdd.false, started, stats, say)
     if (g.init & W) == g.bdd.false:
         return False, None, _explain_symbolic(g, reach, W, explain)
+    if verdict_only:
+        return True, None, ""
     t = time.perf_counter()
     from iterplan_compiler import limits
 

@@ -174,3 +174,15 @@ def test_symbolic_rank_layers_are_mtsa_ranks(prob):
             continue
         for j in range(len(goals)):
             assert orc.rank(j, tup) == ranks.rank[j][s], (s, j)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_realizability_only_gives_the_same_verdict(prob):
+    """``synthesize(..., realizability_only=True)`` (``iterc synth --realizability-only``)
+    stops at the verdict: the full run's verdict, no controller, both solvers."""
+    for solver in ("symbolic", "explicit"):
+        full = synthesize(prob, solver=solver, explain=False)
+        quick = synthesize(prob, solver=solver, explain=False, realizability_only=True)
+        assert quick.realizable == full.realizable
+        assert quick.controller is None and quick.composition is None

@@ -37,6 +37,22 @@ def test_realizable(tmp_path, capsys):
     assert "Ctrl: realizable" in out and "controller:" in out and "time:" in out
 
 
+def test_realizability_only_and_progress(tmp_path, capsys):
+    """``--realizability-only`` stops at the verdict (no controller, exit code as usual);
+    ``-v`` prints the solver's progress with elapsed seconds on stderr, ``-q`` nothing."""
+    assert _run(tmp_path, SPEC, "Ctrl", "--realizability-only", "-v") == 0
+    cap = capsys.readouterr()
+    assert "Ctrl: realizable" in cap.out and "controller: not built" in cap.out
+    assert "states," not in cap.out.split("controller:")[1]
+    lines = cap.err.splitlines()
+    assert any(" s] verdict: realizable at " in line for line in lines), cap.err
+    assert all(line.startswith("[") for line in lines), cap.err
+    text = SPEC.replace("controllable = {c, d}", "controllable = {c}")
+    assert _run(tmp_path, text, "Ctrl", "--realizability-only", "-q") == 1
+    cap = capsys.readouterr()
+    assert "UNREALIZABLE" in cap.out and "verdict:" not in cap.err
+
+
 def test_unrealizable_explained(tmp_path, capsys):
     # d is now uncontrollable: after u the environment always chooses it, so C never holds
     text = SPEC.replace("controllable = {c, d}", "controllable = {c}")

@@ -60,6 +60,11 @@ def test_compiled_membership_is_bdd_membership(backend, seed):
     sets = CompiledSets(bdd, vecs)
     us = [_random_set(bdd, vecs, rng, rng.randint(0, 6)) for _ in range(4)]
     us += [~us[0], bdd.true, bdd.false]
+    _check_members(bdd, vecs, widths, sets, us)
+
+
+def _check_members(bdd, vecs, widths, sets, us):
+    """Every state against every set: the compiled walk against ``dd``'s ``<=``."""
     roots = [sets.add(u) for u in us]
     for s in _states(widths):
         cube = bdd.true
@@ -67,6 +72,20 @@ def test_compiled_membership_is_bdd_membership(backend, seed):
             cube &= vec.eq(bdd, v)
         for u, root in zip(us, roots, strict=True):
             assert sets.member(root, s) == (cube <= u), (s, u)
+
+
+@pytest.mark.parametrize("backend", ["cudd", "autoref"])
+@pytest.mark.parametrize("seed", range(4))
+def test_membership_with_components_split_in_the_order(backend, seed):
+    """A component's bits need not be adjacent in the variable order (shared fluent
+    variables of recoded machines sit where first declared)."""
+    bdd = _manager(backend)
+    rng = random.Random(seed)
+    bdd.declare("a0", "b0", "a1", "c0", "b1", "a2")
+    vecs = [BitVec(("a0", "a1", "a2")), BitVec(("b0", "b1")), BitVec(("c0",))]
+    sets = CompiledSets(bdd, vecs)
+    us = [_random_set(bdd, vecs, rng, rng.randint(1, 6)) for _ in range(4)]
+    _check_members(bdd, vecs, [3, 2, 1], sets, us)
 
 
 @pytest.mark.parametrize("backend", ["cudd", "autoref"])

@@ -264,3 +264,49 @@ def test_turns_keep_the_explanation(prob):
     off = synthesize(prob, macro=MacroSteps.OFF, explain=True)
     assert on.realizable == off.realizable
     assert on.explanation == off.explanation
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(turn_problems())
+def test_turn_game_verdict_only_builds_no_deferred_relation(prob):
+    """With every multi-owner action deferred (``partition.DEFER_NODES = 0``) the turn game
+    still gives the full game's verdict, and a verdict-only solve never builds the system
+    exit's deferred relation (the exit is imaged through its clusters): so on
+    GyroLTLVar2_701 the 5.5 M-node ``tick`` is not built before its verdict."""
+    from unittest.mock import patch
+
+    from iterplan_compiler.synthesis import partition
+    from iterplan_compiler.synthesis.game import solve_symbolic
+    from iterplan_compiler.synthesis.symbolic_game import SymbolicGame as Game
+
+    spec = prepare(prob)
+    want = synthesize(prob, explain=False, macro=MacroSteps.OFF).realizable
+    stats: dict = {}
+    with patch.object(partition, "DEFER_NODES", 0), \
+            patch.object(Game, "reachable", side_effect=AssertionError("full BFS")):
+        try:
+            ok, ctrl, _ = solve_symbolic(spec, stats, lambda _m: None, explain=False,
+                                         name="C", verdict_only=True)
+        except AssertionError:  # the conditions failed: the full game's BFS was asked for
+            assert stats.get("turns", "").startswith("off"), stats
+            return
+    assert stats["turns"] == "on" and ctrl is None and ok == want
+    with patch.object(partition, "DEFER_NODES", 0), \
+            patch.object(partition.Group, "rel", property(_no_build, _set_rel)):
+        ok, ctrl, _ = solve_symbolic(spec, {}, lambda _m: None, explain=False, name="C",
+                                     verdict_only=True)
+        assert ok == want and ctrl is None
+
+
+def _no_build(grp):
+    """``Group.rel`` that refuses to build the system exit's (``tick``) deferred relation
+    (the chain and environment groups' relations the turn game reads, so they are built)."""
+    if grp.factors and "tick" in grp.actions:
+        raise AssertionError("the exit's deferred relation was built before the verdict")
+    if grp.factors:
+        grp.built, grp.factors = grp.within(), ()
+    return grp.built
+
+
+def _set_rel(grp, value):
+    grp.built, grp.factors = value, ()
