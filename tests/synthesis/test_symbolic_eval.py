@@ -160,7 +160,13 @@ def test_compiled_sets_survive_garbage_collection(backend, seed):
             assert sets.member(root, s) == (bdd.let(point, u) == bdd.true), s
 
 
-def test_cached_moves_are_product_moves():
+@pytest.mark.parametrize("memo_max_owners", [4, 1, 0])
+def test_cached_moves_are_product_moves(memo_max_owners, monkeypatch):
+    """Same moves, same order, with the memo and without it (``MEMO_MAX_OWNERS``: 0 and 1
+    synchronise the two- and three-owner actions directly, nondeterministic ``x`` too)."""
+    from iterplan_compiler.synthesis import symbolic_eval
+
+    monkeypatch.setattr(symbolic_eval, "MEMO_MAX_OWNERS", memo_max_owners)
     a = make_lts("A", 3, [(0, "x", 1), (1, "y", 2), (2, "x", 0), (1, "tau", 0), (0, "z", -1)],
                  {"x", "y", "z"})
     b = make_lts("B", 2, [(0, "x", 1), (0, "x", 0), (1, "y", 0), (1, "w", 1)],
