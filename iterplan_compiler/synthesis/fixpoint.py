@@ -333,17 +333,18 @@ def _mu_y_chained(bdd: Any, op: Op, not_a: list[Node], s: _Goal, Z: Node, recycl
 
 
 def nu_x(bdd: Any, op: Op, base: Node, not_a: Node, start: Node,
-         stats: dict[str, int] | None = None) -> Node:
+         stats: dict[str, int] | None = None, *, first: Node | None = None) -> Node:
     """``νX. step(X)`` from ``start`` (an over-approximation), descending inside ``start``.
 
     ``X_{k+1} = step(X_k) ∧ start ⊆ X_k`` by monotonicity, so the first repetition (or
     ``∅``) is the fixpoint; for ``¬A_i = ∅`` the step ignores ``X``: one evaluation.
-    ``stats["x"]`` counts the steps.  Also the νX of MTSA's rank layers
+    ``stats["x"]`` counts the steps.  ``first``: ``step(start) ∧ start`` when the caller
+    knows it without a CPre.  Also the νX of MTSA's rank layers
     (``symbolic_strategy.rank_layers``).
     """
     stats = {"x": 0} if stats is None else stats
     stats["x"] += 1
-    X = op.x_step(base, not_a, start) & start
+    X = op.x_step(base, not_a, start) & start if first is None else first
     if not_a == bdd.false:
         return X
     prev = start

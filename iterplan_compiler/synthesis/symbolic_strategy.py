@@ -97,9 +97,15 @@ def rank_layers(g: SymbolicGame, W: Node, goal: Node, A: list[Node], *,
 
 def _nu_x(g: SymbolicGame, below: Node, step: Node, W: Node, ratio: int) -> Node:
     """``νX. below ∪ (step ∩ CPre(X))`` from ``W`` (``below, step ⊆ W``): the fixpoint
-    engine's νX (:func:`fixpoint.nu_x`) with its frontier step (exact ``cpre_lost``)."""
+    engine's νX (:func:`fixpoint.nu_x`) with its frontier step (exact ``cpre_lost``).
+
+    Its first iterate is ``below ∪ step`` without a CPre: the winning region lies in its own
+    CPre (every state of the engine's ``W`` is in ``CPre`` of one of its iterates, all
+    inside ``W``), so ``step ∩ CPre(W) = step``.  One full CPre fewer per layer: GyroLTL_595's
+    layers 59.7 → 28.8 s CPU (docs/synthesis.md)."""
     frontier = CallableFrontierPre(g.cpre, g.cpre_lost) if ratio else None
-    return nu_x(g.bdd, StateOp(g.bdd, g.cpre, frontier, ratio), below, step, W)
+    return nu_x(g.bdd, StateOp(g.bdd, g.cpre, frontier, ratio), below, step, W,
+                first=below | step)
 
 
 class _Oracle:
