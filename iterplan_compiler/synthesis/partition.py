@@ -130,7 +130,6 @@ def owner_groups(bdd: Any, v: Vars, comps: Sequence[LTS], controllable: frozense
                 break
             if len(r) > DEFER_NODES and i + 1 < len(fs):
                 later.setdefault(key, []).append((r, *fs[i + 1:]))
-                parts.setdefault(key, [])
                 r = None
                 break
         parts.setdefault(key, []).append((a, bdd.false if r is None else r))
