@@ -245,6 +245,8 @@ class SymbolicGame:
             rels.append(self._component_relation(k, c))
         self.valid, self.error, self.init = valid, err & valid, init
         self.live = valid & ~err
+        #: per component ``{label: R_k^a}`` (:meth:`action_parts` reads them again)
+        self.component_rels: tuple[dict[str, Node], ...] = tuple(rels)
         self.groups = self._groups(rels)
         self.env = self.live & disjoin(b, [b.exist(g.nxt_vars, g.rel)
                                            for g in self.groups if not g.controllable])
@@ -272,7 +274,7 @@ class SymbolicGame:
         if action not in self._parts:
             comps = self.spec.components
             self._parts[action] = [
-                (self._component_relation(k, c).get(action, self.bdd.false)
+                (self.component_rels[k].get(action, self.bdd.false)
                  & self.to_next(self.live_parts[k]), frozenset(self.cur[k].names))
                 for k, c in enumerate(comps) if action in c.alphabet]
         return self._parts[action]
