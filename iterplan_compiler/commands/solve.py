@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-sift-after-build", action="store_true",
                         help="no explicit sifting pass between building the relations and "
                         "the fixpoint (dynamic reordering only)")
+    parser.add_argument("--no-reorder-backoff", action="store_true",
+                        help="CUDD's own reordering trigger everywhere (by default the trigger "
+                        "backs off inside a relational product that keeps restarting)")
     parser.add_argument("--max-growth", type=float, default=None,
                         help="CUDD sifting max growth (default: dd's 1.2)")
     parser.add_argument("--monolithic", action="store_true",
@@ -87,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
         max_growth=args.max_growth,
         partition=not args.monolithic,
         cluster_nodes=args.cluster_nodes,
+        reorder_backoff=not args.no_reorder_backoff,
     )
     sopt = SolverOptions(
         feedback=not args.no_feedback,
@@ -123,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"total            {st['total_s']:.3f} s")
         if st.get("peak_live_nodes") is not None:
             print(f"BDD              peak {st['peak_live_nodes']} live nodes, "
-                  f"{st['reorderings']} reorderings, {st['reordering_s']:.3f} s reordering")
+                  f"{st['reorderings']} reorderings, {st['reordering_s']:.3f} s reordering"
+                  + (f", {st['trigger_raises']} triggers backed off" if st["trigger_raises"]
+                     else ""))
         print(f"peak memory      {st['peak_rss_mb']:.1f} MB")
     return 0 if res.realizable else 1

@@ -32,6 +32,8 @@ from typing import Any
 from iterplan_compiler.diagnostics import Diagnostic, error
 from iterplan_compiler.gr1.slugsin import Expr, SlugsSpec, variables_of
 from iterplan_compiler.symbolic import bdd as _bdd
+from iterplan_compiler.symbolic.backoff import Backoff
+from iterplan_compiler.symbolic.backoff import install as install_backoff
 
 Node = Any
 
@@ -59,7 +61,9 @@ class GameOptions:
     partitioned relations exist (see :func:`build_game`); ``max_growth``: CUDD's sifting
     growth bound;
     ``partition``: keep the transition relations as quantification-scheduled clusters
-    (otherwise one monolithic BDD per player); ``cluster_nodes``: cluster size bound.
+    (otherwise one monolithic BDD per player); ``cluster_nodes``: cluster size bound;
+    ``reorder_backoff``: with ``reordering``, CUDD's trigger backs off inside a fused product
+    that keeps restarting (:mod:`iterplan_compiler.symbolic.backoff`).
     """
 
     order: GameOrder = GameOrder.INTERLEAVED
@@ -69,6 +73,7 @@ class GameOptions:
     max_growth: float | None = None
     partition: bool = True
     cluster_nodes: int = 5000
+    reorder_backoff: bool = True
 
 
 @dataclass
@@ -100,6 +105,7 @@ class Game:
     live_primed: bool
     options: GameOptions
     stats: dict[str, Any] = field(default_factory=dict)
+    backoff: Backoff | None = None  # the manager's restart back-off (symbolic/backoff.py)
 
     _mono: dict[str, Node] = field(default_factory=dict)
     _swap_map: dict[str, str] | None = None
@@ -150,11 +156,11 @@ class Game:
 
     def and_exists(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
         """``∃ qvars. u ∧ v`` (fused in CUDD; :func:`symbolic.bdd.and_exists`)."""
-        return _bdd.and_exists(self.bdd, u, v, qvars)
+        return _bdd.and_exists(self.bdd, u, v, qvars, self.backoff)
 
     def or_forall(self, u: Node, v: Node, qvars: Iterable[str]) -> Node:
         """``∀ qvars. u ∨ v`` (fused in CUDD; :func:`symbolic.bdd.or_forall`)."""
-        return _bdd.or_forall(self.bdd, u, v, qvars)
+        return _bdd.or_forall(self.bdd, u, v, qvars, self.backoff)
 
     def cpre_trans(self, target: Node) -> Node:
         """Mealy controllable predecessor of a transition-level target.
@@ -389,6 +395,7 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
     if options.max_growth is not None:
         cfg["max_growth"] = options.max_growth
     bdd.configure(**cfg)
+    backoff = install_backoff(bdd) if options.reordering and options.reorder_backoff else None
     names = (spec_order(spec) if options.order is GameOrder.SPEC
              else list(spec.inputs) + list(spec.outputs))
     _declare(bdd, names, options)
@@ -435,6 +442,7 @@ def build_game(spec: SlugsSpec, bdd: Any, options: GameOptions | None = None
         sys_live=sys_live,
         live_primed=live_primed,
         options=options,
+        backoff=backoff,
     )
     game.stats.update(
         env_trans_nodes=game.node_count([p.bdd for p in env_parts]) if env_parts

@@ -97,7 +97,8 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
     ``stats`` keys: ``build_s``, ``winning_s``, ``strategy_s``, ``total_s`` (wall) and the
     same with ``_cpu_s`` (process CPU time, robust when the machine is shared),
     ``winning_nodes``, ``strategy_nodes``, ``peak_live_nodes``, ``reordering_s``,
-    ``peak_rss_mb``, ``iterations`` and the game's build statistics.
+    ``peak_rss_mb``, ``iterations``, ``trigger_raises`` (reorderings whose next trigger the
+    restart back-off raised) and the game's build statistics.
     """
     game_options = game_options or GameOptions()
     t0 = time.perf_counter()
@@ -135,6 +136,7 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
         peak_rss_mb=peak_rss_mb(),
     )
     stats.update(_manager_stats(bdd))
+    stats["trigger_raises"] = game.backoff.raised if game.backoff is not None else 0
     return SolveResult(realizable, game, win.winning, strat, stats), diags
 
 

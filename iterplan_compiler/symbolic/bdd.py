@@ -19,6 +19,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from iterplan_compiler.symbolic.backoff import Backoff
+
 Node = Any  # a dd BDD node (dd.cudd.Function or dd.autoref.Function)
 Manager = Any
 
@@ -90,13 +92,21 @@ def backend_of(bdd: Manager) -> str:
     return "cudd" if type(bdd).__module__.startswith("dd.cudd") else "autoref"
 
 
-def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
-    """``∃ qvars. u ∧ v`` — CUDD's fused relational product when available."""
+def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str],
+               backoff: Backoff | None = None) -> Node:
+    """``∃ qvars. u ∧ v`` — CUDD's fused relational product when available (bracketed for
+    ``backoff``, the manager's :class:`~iterplan_compiler.symbolic.backoff.Backoff`)."""
     qv = set(qvars)
     if not qv:
         return u & v
     if _cudd is not None and backend_of(bdd) == "cudd":
-        return _cudd.and_exists(u, v, qv)
+        if backoff is None:
+            return _cudd.and_exists(u, v, qv)
+        backoff.enter()
+        try:
+            return _cudd.and_exists(u, v, qv)
+        finally:
+            backoff.leave()
     return bdd.exist(qv, u & v)
 
 
@@ -108,13 +118,20 @@ def cofactor(bdd: Manager, u: Node, care: Node) -> Node:
     return u
 
 
-def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str]) -> Node:
+def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str],
+              backoff: Backoff | None = None) -> Node:
     """``∀ qvars. u ∨ v`` — CUDD's fused operator when available (dual of :func:`and_exists`)."""
     qv = set(qvars)
     if not qv:
         return u | v
     if _cudd is not None and backend_of(bdd) == "cudd":
-        return _cudd.or_forall(u, v, qv)
+        if backoff is None:
+            return _cudd.or_forall(u, v, qv)
+        backoff.enter()
+        try:
+            return _cudd.or_forall(u, v, qv)
+        finally:
+            backoff.leave()
     return bdd.forall(qv, u | v)
 
 
