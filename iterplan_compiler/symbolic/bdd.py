@@ -100,14 +100,19 @@ def and_exists(bdd: Manager, u: Node, v: Node, qvars: Iterable[str],
     if not qv:
         return u & v
     if _cudd is not None and backend_of(bdd) == "cudd":
-        if backoff is None:
-            return _cudd.and_exists(u, v, qv)
-        backoff.enter()
-        try:
-            return _cudd.and_exists(u, v, qv)
-        finally:
-            backoff.leave()
+        return _fused(_cudd.and_exists, u, v, qv, backoff)
     return bdd.exist(qv, u & v)
+
+
+def _fused(op: Any, u: Node, v: Node, qv: set[str], backoff: Backoff | None) -> Node:
+    """CUDD's fused ``op(u, v, qv)``, bracketed as one product for ``backoff``."""
+    if backoff is None:
+        return op(u, v, qv)
+    backoff.enter()
+    try:
+        return op(u, v, qv)
+    finally:
+        backoff.leave()
 
 
 def cofactor(bdd: Manager, u: Node, care: Node) -> Node:
@@ -125,13 +130,7 @@ def or_forall(bdd: Manager, u: Node, v: Node, qvars: Iterable[str],
     if not qv:
         return u | v
     if _cudd is not None and backend_of(bdd) == "cudd":
-        if backoff is None:
-            return _cudd.or_forall(u, v, qv)
-        backoff.enter()
-        try:
-            return _cudd.or_forall(u, v, qv)
-        finally:
-            backoff.leave()
+        return _fused(_cudd.or_forall, u, v, qv, backoff)
     return bdd.forall(qv, u | v)
 
 
