@@ -97,20 +97,27 @@ class Observer:
                             f"{self.timeout:.0f} s ({why}; {self.diag})")
 
     def _await_live(self, end: float) -> str | None:
-        """None once HEARTBEAT and two GLOBAL_POSITION_INT with advancing time have arrived."""
+        """None once HEARTBEAT and two GLOBAL_POSITION_INT with advancing time have arrived
+        and the autopilot accepted the message intervals (positions at the default stream
+        rate also arrive without it, ~1 Hz: too sparse for the scenarios' judgements)."""
         hb0, pos_t, asked = self.diag["hb"], [], 0.0
+        cmd = mav.MAV_CMD_SET_MESSAGE_INTERVAL
+        self.acks.pop(cmd, None)
         while time.monotonic() < end and not self._eof:
-            if time.monotonic() - asked > 1.0:       # until it is answered: ask again
-                self._request()
+            if time.monotonic() - asked > 1.0 and self.acks.get(cmd) != mav.MAV_RESULT_ACCEPTED:
+                self._request()                  # until it is accepted: ask again
                 asked = time.monotonic()
             n = len(self.samples)
             self._pump_once(0.2)
             pos_t += [s[0] for s in self.samples[n:]]
-            if self.diag["hb"] > hb0 and len(pos_t) >= 2 and pos_t[-1] > pos_t[0]:
+            if (self.diag["hb"] > hb0 and len(pos_t) >= 2 and pos_t[-1] > pos_t[0]
+                    and self.acks.get(cmd) == mav.MAV_RESULT_ACCEPTED):
                 self.last_rx = time.monotonic()
                 return None
+        ok = "accepted" if self.acks.get(cmd) == mav.MAV_RESULT_ACCEPTED else "not accepted"
         return ("EOF" if self._eof else
-                f"{self.diag['hb'] - hb0} heartbeats, {len(pos_t)} positions")
+                f"{self.diag['hb'] - hb0} heartbeats, {len(pos_t)} positions, interval "
+                f"request {ok}")
 
     def _request(self) -> None:
         self.m.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
