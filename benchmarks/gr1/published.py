@@ -73,7 +73,7 @@ def row(n: int, runs: list[dict]) -> str:
     anc = ANCHORS.get(n, {})
     anchors = " / ".join(f"{k} {v:g}" for k, v in anc.items()) or "-"
     if not ok:
-        return f"| {n} | {runs[0]['status']} | - | - | - | - | {anchors} |"
+        return f"| {n} | {runs[0]['status']} | - | - | - | - | - | {anchors} |"
     verdict = "REALIZABLE" if ok[0]["realizable"] else "UNREALIZABLE"
     if len({r["realizable"] for r in ok}) > 1:
         verdict = "INCONSISTENT"
@@ -85,7 +85,8 @@ def row(n: int, runs: list[dict]) -> str:
     cpu = [float(r["total_cpu_s"]) for r in ok]
     spread = f" ({min(cpu):.2f}–{max(cpu):.2f})" if len(cpu) > 1 else ""
     return (f"| {n} | {verdict} | {med('total_cpu_s')}{spread} | {med('reordering_s')} | "
-            f"{med('reorderings', 0)} | {med('peak_live_nodes', 0)} | {anchors} |")
+            f"{med('reorderings', 0)} | {med('trigger_raises', 0)} | {med('peak_live_nodes', 0)} | "
+            f"{anchors} |")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -102,8 +103,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     extra = shlex.split(args.solver_args)
     print("| n | verdict | CPU s (median, range) | reordering s | reorderings | "
-          "peak live nodes | anchors (wall s) |")
-    print("|---|---|---|---|---|---|---|")
+          "triggers backed off | peak live nodes | anchors (wall s) |")
+    print("|---|---|---|---|---|---|---|---|")
     for n, path in found:
         runs = []
         for _ in range(args.runs):

@@ -27,9 +27,10 @@ def test_instances_by_name(tmp_path: Path) -> None:
 
 def test_row_medians_and_timeouts() -> None:
     runs = [{"status": "ok", "realizable": True, "total_cpu_s": c, "reordering_s": 0.5,
-             "reorderings": 4, "peak_live_nodes": 100} for c in (3.0, 1.0, 2.0)]
+             "reorderings": 4, "trigger_raises": t, "peak_live_nodes": 100}
+            for c, t in ((3.0, 2), (1.0, 2), (2.0, 3))]
     row = published.row(60, runs)
-    assert row.startswith("| 60 | REALIZABLE | 2.00 (1.00–3.00) | 0.50 | 4 | 100 |")
+    assert row.startswith("| 60 | REALIZABLE | 2.00 (1.00–3.00) | 0.50 | 4 | 2 | 100 |")
     assert "gr1c 42.11" in row
     assert published.row(7, [{"status": "timeout"}]).startswith("| 7 | timeout | - |")
 
