@@ -9,6 +9,7 @@ import argparse
 import json
 import sys
 
+from iterplan_compiler.commands import talk
 from iterplan_compiler.gr1.game import GameOrder
 from iterplan_compiler.gr1.slugsin import SpecFormat
 from iterplan_compiler.gr1.strategy import StrategyOptions, StrategyReordering
@@ -62,6 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="keep S_j ∧ Win instead of simplifying S_j by restrict to the "
                         "care set Win ∧ ρe")
     parser.add_argument("--json", action="store_true", help="print statistics as JSON")
+    talk.add_flags(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -102,7 +104,8 @@ def run(args: argparse.Namespace) -> int:
                             final_sift=not args.no_strategy_final_sift,
                             restrict=not args.no_strategy_restrict)
     res, diags = solve(spec, strategy=not args.realizability_only, game_options=gopt,
-                       solver_options=sopt, strategy_options=stopt)
+                       solver_options=sopt, strategy_options=stopt,
+                       progress=talk.progress(args))
     if diags:
         print(render(diags, sources), file=sys.stderr)
     if res is None:

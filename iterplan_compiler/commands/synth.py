@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-from collections.abc import Callable
 
 from iterplan_compiler import pipeline
+from iterplan_compiler.commands import talk
 from iterplan_compiler.diagnostics import Diagnostic, render
 from iterplan_compiler.synthesis.driver import (
     MacroSteps,
@@ -53,11 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--realizability-only", action="store_true",
                         help="stop at the verdict: build no controller (SYNTECH15's large "
                              "games decide in seconds, their controllers take minutes)")
-    talk = parser.add_mutually_exclusive_group()
-    talk.add_argument("-v", "--verbose", action="store_true",
-                      help="print the solver's progress on stderr (default when stderr is "
-                           "a terminal)")
-    talk.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    talk.add_flags(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     options = pipeline.SynthesisOptions(Solver(args.solver), explain=args.explain,
                                         order=VariableOrder(args.order),
                                         macro=MacroSteps(args.macro),
-                                        progress=_progress(args),
+                                        progress=talk.progress(args),
                                         realizability_only=args.realizability_only)
     synth = pipeline.synthesise(posed, options)
     result = synth.result
@@ -94,18 +89,6 @@ def run(args: argparse.Namespace) -> int:
     if not result.realizable and args.explain and result.explanation:
         print(result.explanation)
     return 0 if result.realizable else 1
-
-
-def _progress(args: argparse.Namespace) -> Callable[[str], None] | None:
-    """Progress lines on stderr (``[12.3 s] …``, seconds since the solve began), or None."""
-    if args.quiet or not (args.verbose or sys.stderr.isatty()):
-        return None
-    start = time.perf_counter()
-
-    def say(msg: str) -> None:
-        print(f"[{time.perf_counter() - start:7.1f} s] {msg}", file=sys.stderr, flush=True)
-
-    return say
 
 
 def format_report(name: str, result: SynthesisResult) -> str:

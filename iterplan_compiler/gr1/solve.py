@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import resource
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -58,8 +59,10 @@ class SolverOptions:
 
 
 def winning_set(game: Game, *, keep_iterates: bool = False,
-                options: SolverOptions | None = None) -> Winning:
-    """GR(1) winning region of ``game`` (slugs semantics, see the module docstring)."""
+                options: SolverOptions | None = None,
+                progress: Callable[[str], None] | None = None) -> Winning:
+    """GR(1) winning region of ``game`` (slugs semantics, see the module docstring);
+    ``progress`` gets the fixpoint's Z iterations."""
     options = options or SolverOptions()
     kind = GoalKind.TRANSITION if game.live_primed else GoalKind.STATE
 
@@ -69,7 +72,7 @@ def winning_set(game: Game, *, keep_iterates: bool = False,
     return solve_gr1(game.bdd, game, game.env_live, game.sys_live, goals=kind,
                      keep_iterates=keep_iterates,
                      lost=lost if options.early_unrealizable else None,
-                     options=options.engine())
+                     options=options.engine(), progress=progress)
 
 
 @dataclass
@@ -90,13 +93,17 @@ def peak_rss_mb() -> float:
 
 def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions | None = None,
           solver_options: SolverOptions | None = None, bdd: Any = None,
-          strategy_options: StrategyOptions | None = None
+          strategy_options: StrategyOptions | None = None,
+          progress: Callable[[str], None] | None = None
           ) -> tuple[SolveResult | None, list[Diagnostic]]:
     """Build the game of ``spec``, decide realizability and (optionally) extract a strategy.
 
     ``stats`` keys: ``build_s``, ``winning_s``, ``strategy_s``, ``total_s`` (wall) and the
     same with ``_cpu_s`` (process CPU time, robust when the machine is shared),
     ``winning_nodes``, ``strategy_nodes``, ``peak_live_nodes``, ``reordering_s``,
+    ``progress`` (e.g. ``iterc solve -v``) gets the phases, the fixpoint's Z iterations and
+    the verdict as soon as it is known.
+
     ``peak_rss_mb``, ``iterations``, ``trigger_raises`` (reorderings whose next trigger the
     restart back-off raised) and the game's build statistics.
     """
@@ -105,19 +112,24 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
     c0 = time.process_time()
     if bdd is None:
         bdd = new_manager(reordering=game_options.reordering)  # symbolic/bdd.py
+    say = progress or (lambda _msg: None)
+    say(f"building the game ({len(spec.inputs)} inputs, {len(spec.outputs)} outputs)")
     game, diags = build_game(spec, bdd, game_options)
     if game is None:
         return None, diags
     t1 = time.perf_counter()
     c1 = time.process_time()
-    win = winning_set(game, keep_iterates=strategy, options=solver_options)
+    say(f"game built: ρe {game.stats.get('env_trans_nodes')} nodes, "
+        f"ρs {game.stats.get('sys_trans_nodes')} nodes; winning set ...")
+    win = winning_set(game, keep_iterates=strategy, options=solver_options, progress=progress)
     realizable = win.complete and game.initial_ok(win.winning)
+    say(f"verdict: {'realizable' if realizable else 'unrealizable'}")
     t2 = time.perf_counter()
     c2 = time.process_time()
     strat = None
     stats: dict[str, Any] = dict(game.stats)
     if realizable and strategy:
-        strat = build_strategy(game, win, strategy_options)
+        strat = build_strategy(game, win, strategy_options, progress=progress)
         stats["strategy_nodes"] = strat.node_count()
     t3 = time.perf_counter()
     c3 = time.process_time()

@@ -41,7 +41,7 @@ Extraction controls (:class:`StrategyOptions`, measured in docs/gr1.md):
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from enum import Enum
@@ -228,9 +228,10 @@ def _smallest(game: Game, plain: list[Node], restricted: list[Node]) -> list[Nod
     return min((plain, restricted, mixed), key=game.node_count)
 
 
-def build_strategy(game: Game, win: Winning, options: StrategyOptions | None = None
-                   ) -> Strategy:
-    """Construct the per-goal strategy relations from the iterates in ``win``.
+def build_strategy(game: Game, win: Winning, options: StrategyOptions | None = None,
+                   progress: Callable[[str], None] | None = None) -> Strategy:
+    """Construct the per-goal strategy relations from the iterates in ``win`` (``progress``
+    hears of each goal's).
 
     The iterates are *consumed*: ``win.y_layers[j]`` and ``win.x_sets[j]`` are emptied once
     goal ``j``'s relation exists (fewer live nodes for sifting; nothing reads them later).
@@ -254,8 +255,12 @@ def build_strategy(game: Game, win: Winning, options: StrategyOptions | None = N
                 restricted.append(_bdd.cofactor(bdd, s, care))
             # goal j's iterates are consumed: releasing them keeps sifting cheap
             win.y_layers[j], win.x_sets[j] = [], []
+            if progress:
+                progress(f"strategy: goal {j + 1}/{len(game.sys_live)}, {len(bdd)} live nodes")
         per_goal = _smallest(game, plain, restricted)
         del plain, restricted, care
         if options.final_sift and can_sift:
+            if progress:
+                progress("strategy: final sifting")
             bdd.reorder()
     return Strategy(game, win.winning, per_goal)

@@ -130,6 +130,25 @@ def test_game_diagnostics():
     assert all(d.span.file == "g.slugsin" and d.span.line > 0 for d in diags)
 
 
+def test_cli_solve_progress(tmp_path, capsys):
+    """``-v``: phases, Z iterations, the verdict and each goal's strategy on stderr; ``-q``
+    (and stderr not a terminal, as here) nothing; the report on stdout either way."""
+    p = tmp_path / "arb.slugsin"
+    p.write_text(generators.arbiter(3))
+    assert iterc(["solve", str(p), "-v"]) == 0
+    cap = capsys.readouterr()
+    lines = cap.err.splitlines()
+    assert lines[0].endswith("building the game (3 inputs, 3 outputs)"), cap.err
+    assert any("gr1: Z-iteration 1" in line for line in lines)
+    assert any(line.endswith("verdict: realizable") for line in lines)
+    assert any("strategy: goal 3/3" in line for line in lines)
+    assert all(line.startswith("[") and " s] " in line for line in lines)
+    assert "REALIZABLE" in cap.out
+    for quiet in (["-q"], []):
+        assert iterc(["solve", str(p), *quiet]) == 0
+        assert capsys.readouterr().err == ""
+
+
 def test_cli_solve(tmp_path, capsys):
     p = tmp_path / "arb.slugsin"
     p.write_text(generators.arbiter(3))
