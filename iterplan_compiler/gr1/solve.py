@@ -101,11 +101,11 @@ def solve(spec: SlugsSpec, *, strategy: bool = True, game_options: GameOptions |
     ``stats`` keys: ``build_s``, ``winning_s``, ``strategy_s``, ``total_s`` (wall) and the
     same with ``_cpu_s`` (process CPU time, robust when the machine is shared),
     ``winning_nodes``, ``strategy_nodes``, ``peak_live_nodes``, ``reordering_s``,
-    ``progress`` (e.g. ``iterc solve -v``) gets the phases, the fixpoint's Z iterations and
-    the verdict as soon as it is known.
-
     ``peak_rss_mb``, ``iterations``, ``trigger_raises`` (reorderings whose next trigger the
     restart back-off raised) and the game's build statistics.
+
+    ``progress`` (e.g. ``iterc solve -v``) hears of the phases, the fixpoint's Z iterations,
+    the verdict as soon as it is known and each goal's strategy relation.
     """
     game_options = game_options or GameOptions()
     t0 = time.perf_counter()
