@@ -8,11 +8,13 @@ the same verdict and winning set as without it.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
 import pytest
 
+from iterplan_compiler.cli import main as iterc
 from iterplan_compiler.gr1.game import GameOptions
 from iterplan_compiler.gr1.slugsin import parse
 from iterplan_compiler.gr1.solve import solve
@@ -103,3 +105,16 @@ def test_same_game_with_and_without_backoff(monkeypatch: pytest.MonkeyPatch) -> 
                     res.stats["trigger_raises"])
     assert runs[True][:2] == runs[False][:2]
     assert runs[True][2] > 0 and runs[False][2] == 0
+
+
+@needs_cudd
+def test_cli_flag_switches_it_off(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                  capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setattr(backoff, "KEPT", 0)  # so that it acts on a small instance
+    p = tmp_path / "synt15_25.slugsin"
+    p.write_text(generators.synt15(25))
+    raises = []
+    for flags in ([], ["--no-reorder-backoff"]):
+        assert iterc(["solve", str(p), "--realizability-only", "--json", *flags]) == 0
+        raises.append(json.loads(capsys.readouterr().out)["trigger_raises"])
+    assert raises[0] > 0 and raises[1] == 0
