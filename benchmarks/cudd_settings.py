@@ -42,20 +42,10 @@ def _cudd_lib() -> Any:
     lib = ctypes.CDLL(dd.cudd.__file__)
     for name, res in (("Cudd_ReadGarbageCollections", ctypes.c_int),
                       ("Cudd_ReadGarbageCollectionTime", ctypes.c_long),
-                      ("Cudd_ReadSlots", ctypes.c_uint), ("Cudd_ReadCacheSlots", ctypes.c_uint),
-                      ("Cudd_ReadSize", ctypes.c_int)):
+                      ("Cudd_ReadSlots", ctypes.c_uint), ("Cudd_ReadCacheSlots", ctypes.c_uint)):
         getattr(lib, name).argtypes = [ctypes.c_void_p]
         getattr(lib, name).restype = res
     return lib
-
-
-def _manager_pointer(bdd: Any, lib: Any) -> int | None:
-    """The ``DdManager *`` of a ``dd.cudd.BDD`` (the Cython object's first field after the
-    object header and the vtable pointer); checked against the variable count."""
-    p = ctypes.c_void_p.from_address(id(bdd) + 24).value
-    if p and lib.Cudd_ReadSize(p) == len(bdd.vars):
-        return p
-    return None
 
 
 def _counters(bdd: Any) -> dict[str, Any]:
@@ -67,8 +57,10 @@ def _counters(bdd: Any) -> dict[str, Any]:
     out = {k: s[k] for k in ("cache_size", "cache_lookups", "cache_hits", "cache_insertions",
                              "cache_collisions", "unique_size", "peak_live_nodes",
                              "peak_nodes", "mem")}
+    from iterplan_compiler.symbolic.backoff import manager_pointer
+
     lib = _cudd_lib()
-    p = _manager_pointer(bdd, lib)
+    p = manager_pointer(bdd)  # the checked read of the package (dd 0.6.0 only)
     if p is not None:
         out["gc"] = lib.Cudd_ReadGarbageCollections(p)
         out["gc_s"] = lib.Cudd_ReadGarbageCollectionTime(p) / 1000
