@@ -65,6 +65,9 @@ EXAMPLES = {
 AIRCRAFT = {
     "stock": {},
     "slow": {"AIRSPEED_CRUISE": 17, "WP_LOITER_RAD": 60},
+    # slow with a shorter L1 period: tighter path following, so the runtime plans tighter
+    # turns (runtime.vehicle.planning_bank_deg; the experiments' `sitl-tight` vehicle)
+    "tight": {"AIRSPEED_CRUISE": 17, "WP_LOITER_RAD": 60, "NAVL1_PERIOD": 8},
 }
 TOLERANCE = 0.10
 

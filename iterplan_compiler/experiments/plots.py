@@ -24,8 +24,9 @@ PAPER_PATROL_700K_PCT = 88.0     # Ordered Patrol at 700,000 locations: at most 
 PAPER_COVER_PCT = 60.0           # Cover, distance sorter: near constant ~60 % overhead
 
 
-def plot(experiment: Experiment, points: Sequence[Point], path: Path) -> Path:
-    """Draw one experiment's figure to ``path`` (PNG); returns the path."""
+def plot(experiment: Experiment, points: Sequence[Point], path: Path, note: str = "") -> Path:
+    """Draw one experiment's figure to ``path`` (PNG), ``note`` (e.g. the vehicle) in the
+    footnote; returns the path."""
     exp = experiment.value  # the points are CSV rows: their experiment is the value
     import matplotlib
 
@@ -80,7 +81,7 @@ def plot(experiment: Experiment, points: Sequence[Point], path: Path) -> Path:
     ax.set_title(TITLES.get(experiment, exp), fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.text(0.01, 0.01, "error bars: 3 SEM", fontsize=6)
+    fig.text(0.01, 0.01, "error bars: 3 SEM" + (f"; {note}" if note else ""), fontsize=6)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     # No timestamp in PNG metadata: re-running gives the same file for the same data.

@@ -17,7 +17,8 @@ How it is computed (:class:`IdealMethod`, reported next to the number):
   Euclidean distance matrix (centimetres), an open path forced through a dummy node.  An upper
   bound of the optimum that is, on grid cells, the optimum in practice; it is never below the
   Euclidean minimum spanning tree (a lower bound), and ``lower`` carries that bound so the gap
-  can be seen;
+  can be seen.  Should LKH fail (it runs in a child process, ``runtime/lkh.py``), the method is
+  ``BOUND`` with that lower bound;
 * ``BOUND`` -- more points: the nearest-neighbour bound, a lower bound of the shortest path:
   the start's distance to the nearest point plus, for every point but one, the distance to its
   nearest other point (every point but the last is left along an edge at least that long;
@@ -39,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from iterplan_compiler.runtime import lkh
 from iterplan_compiler.runtime.planner import shortest_csc
 from iterplan_compiler.runtime.sorter import Pose
 
@@ -123,8 +125,6 @@ def lkh_open_path(d0: np.ndarray, d: np.ndarray) -> tuple[int, ...]:
     symmetric TSP on start + points + a dummy joined to the start at 0 and to every point at a
     constant ``M`` (every tour pays ``M`` once when the dummy sits next to the start, twice
     otherwise, so the solver keeps it there and the tour minus the dummy is the open path)."""
-    import elkai
-
     n = len(d0)
     big = float(d0.max() + d.max()) * 4 + 1.0
     m = np.zeros((n + 2, n + 2))
@@ -132,7 +132,7 @@ def lkh_open_path(d0: np.ndarray, d: np.ndarray) -> tuple[int, ...]:
     m[1:n + 1, 1:n + 1] = d
     m[n + 1, 1:n + 1] = m[1:n + 1, n + 1] = big
     mat = np.rint(m * 100).astype(np.int64).tolist()     # LKH works in integers: cm
-    tour = elkai.DistanceMatrix(mat).solve_tsp(runs=1)[:-1]
+    tour = lkh.solve_matrix(np.asarray(mat), asymmetric=False)[:-1]
     i = tour.index(0)
     tour = tour[i:] + tour[:i]
     if tour[1] == n + 1:
@@ -190,7 +190,10 @@ def ideal_path(points: Sequence[Point] | np.ndarray, start: Point | None = None,
         return Ideal(dist, IdealMethod.EXACT, order, dist)
     if n <= TOUR_MAX:
         lower = max(mst_length(all_pts), nearest_neighbour_bound(start, pts))
-        order = lkh_open_path(d0, _dist_matrix(pts))
+        try:
+            order = lkh_open_path(d0, _dist_matrix(pts))
+        except lkh.LKHError:        # LKH failed (runtime/lkh.py): the bound below
+            return Ideal(lower, IdealMethod.BOUND, (), lower)
         return Ideal(path_length(start, pts, order), IdealMethod.TOUR, order, lower)
     lower = nearest_neighbour_bound(start, pts)
     return Ideal(lower, IdealMethod.BOUND, (), lower)

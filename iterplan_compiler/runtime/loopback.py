@@ -31,7 +31,7 @@ from iterplan_compiler.runtime.mavlink import MODE_NAMES, MODES, mav, mavutil
 from iterplan_compiler.runtime.sim import SimVehicle
 
 PLANE_PARAMS = {"AIRSPEED_CRUISE": 22.0, "ROLL_LIMIT_DEG": 65.0, "WP_LOITER_RAD": 80.0,
-                "WP_RADIUS": 50.0, "NAVL1_PERIOD": 15.0, "AIRSPEED_MIN": 10.0,
+                "WP_RADIUS": 50.0, "NAVL1_PERIOD": 15.0, "NAVL1_DAMPING": 0.75, "AIRSPEED_MIN": 10.0,
                 "AIRSPEED_MAX": 30.0, "TKOFF_ALT": 50.0, "SYSID_MYGCS": 255.0,
                 "FS_GCS_ENABL": 0.0}
 

@@ -69,6 +69,7 @@ from iterplan_compiler.runtime.mavlink_link import (  # re-exported for users an
 )
 from iterplan_compiler.runtime.mavlink_monitor import MavlinkMonitor
 from iterplan_compiler.runtime.vehicle import (
+    L1_REFERENCE,
     PLANNING_BANK_DEG,
     Start,
     Vehicle,
@@ -76,6 +77,7 @@ from iterplan_compiler.runtime.vehicle import (
     VehicleModel,
     VehiclePose,
     cruise_true_airspeed,
+    planning_bank_deg,
 )
 
 __all__ = ["MODES", "MODE_NAMES", "LinkConfig", "MavlinkError", "MavlinkVehicle", "mav",
@@ -88,6 +90,7 @@ PARAMS: dict[str, tuple[str | None, float]] = {
     "WP_LOITER_RAD": (None, 1.0),
     "WP_RADIUS": (None, 1.0),
     "NAVL1_PERIOD": (None, 1.0),
+    "NAVL1_DAMPING": (None, 1.0),
     "AIRSPEED_MIN": ("ARSPD_FBW_MIN", 1.0),
     "AIRSPEED_MAX": ("ARSPD_FBW_MAX", 1.0),
     "TKOFF_ALT": (None, 1.0),
@@ -191,7 +194,10 @@ class MavlinkVehicle(MavlinkMonitor, Vehicle):
         tas = cruise_true_airspeed(cruise, alt)
         roll = self.param("ROLL_LIMIT_DEG") or 45.0
         loiter = self.cfg.loiter_radius or self.param("WP_LOITER_RAD") or 80.0
-        return VehicleModel(tas, min(roll, PLANNING_BANK_DEG), abs(loiter), source)
+        period = self.param("NAVL1_PERIOD") or L1_REFERENCE[0]
+        damping = self.param("NAVL1_DAMPING") or L1_REFERENCE[1]
+        bank = min(roll, planning_bank_deg(period, damping))
+        return VehicleModel(tas, bank, abs(loiter), source, period, damping)
 
     # -- Vehicle API: state -------------------------------------------------------------------
     @property
@@ -212,6 +218,14 @@ class MavlinkVehicle(MavlinkMonitor, Vehicle):
     @property
     def min_turn_radius(self) -> float:  # type: ignore[override]
         return self.model.min_turn_radius
+
+    @property
+    def l1_period(self) -> float:  # type: ignore[override]
+        return self.model.l1_period
+
+    @property
+    def l1_damping(self) -> float:  # type: ignore[override]
+        return self.model.l1_damping
 
     @property
     def loiter_radius(self) -> float:

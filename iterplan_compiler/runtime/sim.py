@@ -25,7 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from iterplan_compiler.runtime.vehicle import G, Vehicle, VehicleEvent, VehiclePose, wrap_pi
+from iterplan_compiler.runtime.vehicle import (
+    G,
+    Vehicle,
+    VehicleEvent,
+    VehiclePose,
+    turn_radius,
+    wrap_pi,
+)
 
 
 @dataclass(frozen=True)
@@ -136,7 +143,12 @@ class SimVehicle(Vehicle):
                  heading: float = math.pi / 2):
         self.p = params or SimParams()
         self.airspeed = self.p.airspeed
-        self.min_turn_radius = self.p.min_turn_radius
+        # What the autopilot may command (planning speed, bank limit), as the MAVLink
+        # vehicle's model says: both then plan the same Dubins radius.  The turn actually
+        # flown (``SimParams.min_turn_radius``: calibrated speed and turn efficiency) is wider;
+        # the planning margin covers that (vehicle.planning_radius).
+        self.min_turn_radius = turn_radius(self.p.airspeed, self.p.bank_limit_deg)
+        self.l1_period, self.l1_damping = self.p.l1_period, self.p.l1_damping
         self.home = (float(home[0]), float(home[1]))
         self._rng = np.random.default_rng(self.p.seed)
         self._t = 0.0

@@ -17,7 +17,8 @@ candidates (:func:`candidate_orders`):
   diameter (a fixed wing cannot U-turn into the adjacent 50 m column);
 * the LKH-3 solution (``elkai``) of the generalised TSP whose nodes are (cell, arrival heading)
   pairs with Dubins leg costs (Noon-Bean transformation to an asymmetric TSP), for up to
-  :data:`LKH_MAX` cells (~3 s at 150 cells);
+  :data:`LKH_MAX` cells (~3 s at 150 cells; in a child process, ``runtime/lkh.py``: if LKH
+  fails, the other candidates remain);
 * the greedy nearest-Dubins order (what ``distance`` would fly on a static region).
 
 The tour is planned when the Iterator is (re)initialised over all locations (``reset``: at the
@@ -35,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from iterplan_compiler.runtime import lkh
 from iterplan_compiler.runtime.planner import shortest_csc
 from iterplan_compiler.runtime.sorter import Pose, Sorter, dubins_lengths
 
@@ -179,18 +181,11 @@ def _lkh_gtsp(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
 
 
 def solve_atsp(matrix: np.ndarray, trials: int) -> list[int]:
-    """An (asymmetric) TSP tour of the integer ``matrix`` by LKH-3 through ``elkai``, closed
-    (the first node repeated at the end).  LKH's trial budget is ``trials`` (its default, the
-    dimension, costs ~30 s for 600 nodes here), one run, LKH's fixed seed: deterministic."""
-    from elkai import _elkai  # the library's solver entry point: takes LKH parameter text
-
-    n = len(matrix)
-    params = f"RUNS = 1\nMAX_TRIALS = {int(trials)}\nPROBLEM_FILE = :stdin:\n"
-    rows = "\n".join(" ".join(map(str, r)) for r in matrix.tolist())
-    problem = (f"TYPE : ATSP\nDIMENSION : {n}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
-               f"EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n{rows}\n")
-    tour = [i - 1 for i in _elkai.solve_problem(params, problem)]
-    return [*tour, tour[0]]
+    """An (asymmetric) TSP tour of the integer ``matrix`` by LKH-3 (``runtime.lkh``: in a
+    child process), closed (the first node repeated at the end).  LKH's trial budget is
+    ``trials`` (its default, the dimension, costs ~30 s for 600 nodes here), one run, LKH's
+    fixed seed: deterministic.  Raises ``lkh.LKHError``."""
+    return lkh.solve_matrix(matrix, asymmetric=True, trials=trials)
 
 
 def candidate_orders(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
@@ -208,7 +203,10 @@ def candidate_orders(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
     for hs in sets:
         cands.append(_greedy(pts, start, hs, radius))
         if 2 <= len(pts) <= LKH_MAX:
-            cands.append(_lkh_gtsp(pts, start, hs, radius))
+            try:
+                cands.append(_lkh_gtsp(pts, start, hs, radius))
+            except lkh.LKHError:     # the sweeps and the greedy order remain
+                pass
     return cands
 
 

@@ -83,19 +83,33 @@ class SafeAction(Enum):
     NONE = "none"
 
 
+#: Planning uses at most this bank with ArduPlane's L1 navigation at its reference setting
+#: (:data:`L1_REFERENCE`): the L1 path following rarely commands more there, and paths planned
+#: with the full ROLL_LIMIT_DEG (65 in SITL) cannot be followed.
+PLANNING_BANK_DEG = 45.0
+#: (NAVL1_PERIOD, NAVL1_DAMPING) at which :data:`PLANNING_BANK_DEG` was measured on SITL.
+L1_REFERENCE = (15.0, 0.75)
+#: Planning never uses more bank than this, whatever the L1 setting (SITL's ROLL_LIMIT_DEG;
+#: the steepest planned bank flown there, 61.9 deg at NAVL1_PERIOD 8, is below it).
+PLANNING_BANK_MAX_DEG = 65.0
+
+
 @dataclass(frozen=True)
 class VehicleModel:
     """What the planner and the Sorter need to know about the aircraft.
 
     ``airspeed``: cruise speed over ground without wind, i.e. true airspeed (m/s);
     ``bank_limit_deg``: the bank the autopilot may use; ``loiter_radius``: the radius it circles
-    a fly-to target at (ArduPlane WP_LOITER_RAD).  :attr:`min_turn_radius` is the tightest
-    coordinated turn, ``V^2 / (g tan(bank))``."""
+    a fly-to target at (ArduPlane WP_LOITER_RAD); ``l1_period``, ``l1_damping``: its
+    NAVL1_PERIOD and NAVL1_DAMPING.  :attr:`min_turn_radius` is the tightest coordinated turn,
+    ``V^2 / (g tan(bank))``."""
 
     airspeed: float
     bank_limit_deg: float
     loiter_radius: float
     source: str = "default"
+    l1_period: float = L1_REFERENCE[0]
+    l1_damping: float = L1_REFERENCE[1]
 
     @property
     def min_turn_radius(self) -> float:
@@ -107,21 +121,33 @@ def turn_radius(speed: float, bank_deg: float) -> float:
     return speed * speed / (G * math.tan(math.radians(bank_deg)))
 
 
-#: Planning uses at most this bank: ArduPlane's L1 path following rarely commands more, and
-#: paths planned with the full ROLL_LIMIT_DEG (65 in SITL) cannot be followed.
-PLANNING_BANK_DEG = 45.0
 #: Planned turns are this much wider than the tightest turn at the planning bank (margin for
 #: the autopilot's roll-in lag and path-following error).
 PLANNING_MARGIN = 1.4
 
 
+def planning_bank_deg(l1_period: float, l1_damping: float) -> float:
+    """The bank the planner plans turns with under ArduPlane's L1 navigation with this period
+    (s) and damping: :data:`PLANNING_BANK_DEG` at :data:`L1_REFERENCE`, and otherwise the bank
+    whose tangent scales like the largest lateral acceleration L1 pursuit commands,
+    ``4 zeta^2 V^2 / L1`` with ``L1 = zeta P V / pi``, i.e. ``4 pi zeta V / P``: ``tan(bank)
+    x (P_ref / P) x (zeta / zeta_ref)``.  A shorter period tracks tighter turns (measured on
+    SITL, docs/runtime.md); at most :data:`PLANNING_BANK_MAX_DEG`, and the roll limit caps the
+    bank separately (``min_turn_radius``)."""
+    p_ref, z_ref = L1_REFERENCE
+    scale = (p_ref / max(l1_period, 1.0)) * (max(l1_damping, 0.1) / z_ref)
+    bank = math.degrees(math.atan(math.tan(math.radians(PLANNING_BANK_DEG)) * scale))
+    return min(bank, PLANNING_BANK_MAX_DEG)
+
+
 def planning_radius(vehicle: Vehicle, wind: float = 0.0) -> float:
     """The default Dubins radius of the planner and the Sorter for ``vehicle``:
-    ``PLANNING_MARGIN x`` the larger of its tightest turn and the turn at
-    ``PLANNING_BANK_DEG``, grown for an expected ``wind`` (m/s) to what the aircraft can fly
-    over ground downwind, ``x ((V + wind) / V)^2``."""
+    ``PLANNING_MARGIN x`` the larger of its tightest turn and the turn at the planning bank
+    (:func:`planning_bank_deg` of its L1 setting), grown for an expected ``wind`` (m/s) to what
+    the aircraft can fly over ground downwind, ``x ((V + wind) / V)^2``."""
     v = max(vehicle.airspeed, 1.0)
-    r = max(vehicle.min_turn_radius, turn_radius(v, PLANNING_BANK_DEG))
+    bank = planning_bank_deg(vehicle.l1_period, vehicle.l1_damping)
+    r = max(vehicle.min_turn_radius, turn_radius(v, bank))
     return PLANNING_MARGIN * r * (1.0 + max(0.0, wind) / v) ** 2
 
 
@@ -159,6 +185,10 @@ class Vehicle(ABC):
     #: the Sorter size their Dubins paths from these.
     airspeed: float = 18.0
     min_turn_radius: float = 35.0
+    #: ArduPlane's NAVL1_PERIOD (s) and NAVL1_DAMPING: how tight a turn its path following
+    #: holds (:func:`planning_bank_deg`).
+    l1_period: float = L1_REFERENCE[0]
+    l1_damping: float = L1_REFERENCE[1]
 
     @property
     @abstractmethod

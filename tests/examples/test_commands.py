@@ -57,6 +57,22 @@ def test_experiment_fig3c_quick(tmp_path, capsys):
     assert "overhead" in text
 
 
+def test_experiment_refuses_to_mix_aircraft_in_one_directory(tmp_path, capsys):
+    """A sweep resumed or extended into a directory of runs made with another vehicle (or
+    arrival rule) would average two aircraft: refused, unless --fresh; the tight-L1 vehicle
+    plans its tighter turns."""
+    out = tmp_path / "exp"
+    base = ["experiment", "fig3c", "--quick", "--seeds", "1", "--sorters", "distance",
+            "--sizes", "10", "--out", str(out), "--no-progress"]
+    assert cli.main(base) == 0
+    capsys.readouterr()
+    assert cli.main([*base, "--vehicle", "sitl-tight"]) == 2
+    assert "vehicle 'sitl' before, 'sitl-tight' now" in capsys.readouterr().err
+    assert cli.main([*base, "--vehicle", "sitl-tight", "--fresh"]) == 0
+    rows = list(csv.DictReader((out / "fig3c.csv").open()))
+    assert len(rows) == 1 and float(rows[0]["turn_radius"]) == pytest.approx(23.4, abs=0.1)
+
+
 def test_experiment_usage_errors(tmp_path, capsys):
     assert cli.main(["experiment", "fig3b", "--sorters", "fastest", "--out",
                      str(tmp_path)]) == 2

@@ -86,6 +86,26 @@ def test_parameters_give_the_vehicle_model(link):
     assert abs(v.min_turn_radius - v.model.airspeed ** 2 / 9.80665) < 1e-6
 
 
+def test_a_shorter_l1_period_gives_tighter_planned_turns():
+    """NAVL1_PERIOD 8 (ArduPlane's L1 tracks tighter): planning bank 61.9 deg instead of 45,
+    under ROLL_LIMIT_DEG 65; the planner and the Sorter plan 1.4 x that turn."""
+    from iterplan_compiler.runtime.vehicle import planning_radius
+
+    grid = load_map(data=MAP)
+    params = {"AIRSPEED_CRUISE": 17.0, "NAVL1_PERIOD": 8.0, "ROLL_LIMIT_DEG": 65.0}
+    peer, sim, url = start_peer(grid, params=params)
+    v = MavlinkVehicle.connect(url, grid.frame, FAST)
+    try:
+        assert (v.l1_period, v.l1_damping) == (8.0, 0.75)
+        assert abs(v.model.bank_limit_deg - 61.93) < 0.01
+        v_tas = v.model.airspeed
+        expect = 1.4 * v_tas ** 2 / (9.80665 * math.tan(math.radians(v.model.bank_limit_deg)))
+        assert abs(planning_radius(v) - expect) < 1e-6 and planning_radius(v) < 25.0
+    finally:
+        v.close()
+        peer.stop()
+
+
 def test_old_parameter_names_are_converted():
     grid = load_map(data=MAP)
     params = {"TRIM_ARSPD_CM": 1700.0, "LIM_ROLL_CD": 4000.0, "WP_LOITER_RAD": 60.0}

@@ -147,3 +147,29 @@ def test_planner_visits_targets_inside_cells(mode):
         # Arrival heading is parallel to the fixed direction (north or south).
         assert abs(math.cos(pl.heading)) < 1e-6
     assert pl.misses <= 2
+
+
+def test_planning_bank_follows_the_l1_period():
+    """45 deg at SITL's L1 setting (NAVL1_PERIOD 15, damping 0.75); tan(bank) scales like the
+    largest lateral acceleration L1 pursuit commands, 4 pi zeta V / P."""
+    from iterplan_compiler.runtime.vehicle import L1_REFERENCE, planning_bank_deg
+
+    assert planning_bank_deg(*L1_REFERENCE) == pytest.approx(45.0)
+    assert math.tan(math.radians(planning_bank_deg(8.0, 0.75))) == pytest.approx(15 / 8)
+    assert math.tan(math.radians(planning_bank_deg(15.0, 0.9))) == pytest.approx(0.9 / 0.75)
+    assert planning_bank_deg(17.0, 0.75) < 45.0 < planning_bank_deg(12.0, 0.75)
+    assert planning_bank_deg(2.0, 0.75) == 65.0        # never steeper than ever flown
+
+
+@pytest.mark.parametrize("period,radius", [(15.0, 43.9), (8.0, 23.4)])
+def test_the_simulator_plans_what_the_parameters_allow(period, radius):
+    """The SITL-calibrated simulator plans 1.4 x the turn at the planning bank (the MAVLink
+    vehicle's rule): 43.9 m at SITL's L1 period, 23.4 m at NAVL1_PERIOD 8 -- not the wider
+    turn it flies (its turn efficiency), which the margin covers."""
+    from iterplan_compiler.runtime.vehicle import planning_radius
+
+    params = SimParams.from_arduplane({"AIRSPEED_CRUISE": 17.0, "NAVL1_PERIOD": period})
+    v = SimVehicle(params)
+    assert (v.l1_period, v.l1_damping) == (period, 0.75)
+    assert planning_radius(v) == pytest.approx(radius, abs=0.05)
+    assert params.min_turn_radius > v.min_turn_radius     # flown wider than commanded

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -30,9 +31,11 @@ def sitl_dir() -> Path | None:
 
 
 def isolated() -> bool:
-    """True inside a network namespace whose only interface is loopback."""
+    """True inside a network namespace whose only interface is loopback.  (Asked of the
+    kernel through netlink: /sys/class/net shows the namespace sysfs was mounted in, i.e. the
+    host's interfaces under ``in-netns``, which would make every caller re-isolate itself.)"""
     try:
-        names = os.listdir("/sys/class/net")
+        names = [name for _, name in socket.if_nameindex()]
     except OSError:
         return False
     return names == ["lo"]
