@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import enum
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -131,8 +132,8 @@ def lkh_open_path(d0: np.ndarray, d: np.ndarray) -> tuple[int, ...]:
     m[0, 1:n + 1] = m[1:n + 1, 0] = d0
     m[1:n + 1, 1:n + 1] = d
     m[n + 1, 1:n + 1] = m[1:n + 1, n + 1] = big
-    mat = np.rint(m * 100).astype(np.int64).tolist()     # LKH works in integers: cm
-    tour = lkh.solve_matrix(np.asarray(mat), asymmetric=False)[:-1]
+    mat = lkh.integer_matrix(m, 100.0)       # LKH works in integers: cm
+    tour = lkh.solve_matrix(mat, asymmetric=False)[:-1]
     i = tour.index(0)
     tour = tour[i:] + tour[:i]
     if tour[1] == n + 1:
@@ -192,7 +193,9 @@ def ideal_path(points: Sequence[Point] | np.ndarray, start: Point | None = None,
         lower = max(mst_length(all_pts), nearest_neighbour_bound(start, pts))
         try:
             order = lkh_open_path(d0, _dist_matrix(pts))
-        except lkh.LKHError:        # LKH failed (runtime/lkh.py): the bound below
+        except lkh.LKHError as exc:     # LKH failed (runtime/lkh.py): the bound below
+            warnings.warn(f"ideal: {exc}; reporting the lower bound", RuntimeWarning,
+                          stacklevel=2)
             return Ideal(lower, IdealMethod.BOUND, (), lower)
         return Ideal(path_length(start, pts, order), IdealMethod.TOUR, order, lower)
     lower = nearest_neighbour_bound(start, pts)

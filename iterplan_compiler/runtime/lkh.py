@@ -1,14 +1,18 @@
 """LKH-3 (through ``elkai``) run in a forked child, so that LKH cannot take the runtime down.
 
-LKH stops the whole process on an internal assertion: on ArduPlane SITL, one flight in six
-of a 10-cell Cover with the ``tour`` sorter died at take-off with ``LinKernighan: Assertion
-`Gain % Precision == 0' failed`` (the same matrices re-solved in-process did not fail again:
-it depends on LKH's state, not only on the input).  An ``abort()`` cannot be caught in
-Python, and on the aircraft it would end the runtime in the air.  So every solve runs in a
+LKH stops the whole process on an internal assertion: on ArduPlane SITL, 10 of 24 flights of a
+10-cell Cover with the ``tour`` sorter hit ``LinKernighan: Assertion `Gain % Precision == 0'
+failed``.  The cause was an overflow: the first tour was planned from ArduPlane's position
+before its EKF had an origin (near lat/lon 0, 0: 14,000 km away), so the matrix held entries
+of 2.8e9, which LKH multiplies by 100 in 32-bit ints.  Both ends are fixed (the MAVLink
+monitor ignores positions before home; :func:`integer_matrix` keeps entries below
+:data:`MAX_ENTRY`), and the isolation stays as the defence: an ``abort()`` cannot be caught
+in Python, and on the aircraft it would end the runtime in the air.  So every solve runs in a
 child process (``os.fork``: no re-import, ~5 ms): the tour comes back through a pipe, and a
 child that dies, fails or overruns :data:`TIMEOUT_S` becomes an :class:`LKHError` that the
 callers answer with their other methods (the tour sorter's sweep and greedy orders, the ideal's
-lower bound).  Where ``fork`` does not exist (Windows) LKH runs in-process, as before.
+lower bound) and a ``RuntimeWarning``.  Where ``fork`` does not exist (Windows) LKH runs
+in-process, as before.
 """
 
 from __future__ import annotations
@@ -24,10 +28,25 @@ import numpy as np
 
 #: A solve that takes longer is abandoned (LKH on 2 x 165 + 1 nodes takes ~3 s here).
 TIMEOUT_S = 120.0
+#: Largest matrix entry handed to LKH.  LKH multiplies every cost by its PRECISION (100) in
+#: 32-bit ints; entries of 2.8e9 (a tour planned from a pose 14,000 km away: ArduPlane's
+#: position before its EKF has an origin) overflowed into that assertion.  1e7 x 100 leaves
+#: a factor 2 below INT_MAX.
+MAX_ENTRY = 10_000_000
 
 
 class LKHError(RuntimeError):
     """LKH failed (its child process died, failed or overran); the message says how."""
+
+
+def integer_matrix(costs: np.ndarray, unit: float) -> np.ndarray:
+    """``costs`` in integer multiples of ``1 / unit`` (e.g. ``unit`` 10: decimetres), with a
+    coarser unit where that would put an entry above :data:`MAX_ENTRY` (the order of a tour
+    only needs the costs' ratios)."""
+    top = float(np.max(costs)) if costs.size else 0.0
+    if top * unit > MAX_ENTRY:
+        unit = MAX_ENTRY / top
+    return np.rint(costs * unit).astype(np.int64)
 
 
 def solve_matrix(matrix: np.ndarray, *, asymmetric: bool, trials: int | None = None) -> list[int]:

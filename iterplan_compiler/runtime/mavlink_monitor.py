@@ -136,6 +136,11 @@ class MavlinkMonitor(MavlinkLink):
     def _on_position(self, msg: Any) -> None:
         self._last_pos_wall = time.monotonic()
         self._boot_t = max(self._boot_t, msg.time_boot_ms / 1000.0)
+        if self.home_amsl is None:
+            # ArduPlane reports positions before its EKF has an origin: for ~9 s after boot
+            # SITL sends lat/lon within metres of (0, 0), 14,000 km from its field.  Home is
+            # set only once the position is real; until then the pose stays where it was.
+            return
         x, y = self.frame.to_enu(msg.lat / 1e7, msg.lon / 1e7)
         vn, ve = msg.vx / 100.0, msg.vy / 100.0
         alt = msg.relative_alt / 1000.0

@@ -32,6 +32,7 @@ with the heading the plan chose (:meth:`TourSorter.planned_heading`).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -168,7 +169,7 @@ def _lkh_gtsp(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
             if h > 1:
                 tsp[u, succ] = 0.0
     np.fill_diagonal(tsp, 0.0)
-    tour = solve_atsp(np.rint(tsp * 10).astype(np.int64), trials=max(20, min(n, TRIALS)))
+    tour = solve_atsp(lkh.integer_matrix(tsp, 10.0), trials=max(20, min(n, TRIALS)))
     i0 = tour.index(0)
     seq = tour[i0:-1] + tour[:i0]
     order, seen = [], set()
@@ -205,8 +206,9 @@ def candidate_orders(pts: np.ndarray, start: Pose, headings: tuple[float, ...],
         if 2 <= len(pts) <= LKH_MAX:
             try:
                 cands.append(_lkh_gtsp(pts, start, hs, radius))
-            except lkh.LKHError:     # the sweeps and the greedy order remain
-                pass
+            except lkh.LKHError as exc:     # the sweeps and the greedy order remain
+                warnings.warn(f"tour sorter: {exc}; planning with the sweeps and the greedy "
+                              "order", RuntimeWarning, stacklevel=2)
     return cands
 
 

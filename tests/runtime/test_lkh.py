@@ -62,9 +62,26 @@ def test_the_callers_fall_back_when_lkh_fails(monkeypatch):
 
     monkeypatch.setattr(lkh, "solve_matrix", fail)
     pts = np.array([((c + 0.5) * 50, (r + 0.5) * 50) for r in range(3) for c in range(5)])
-    order, heads = plan_tour(pts, Pose(-100.0, -100.0, 0.3), (0.0, math.pi / 2, math.pi,
-                                                            3 * math.pi / 2), 23.4, 50.0)
+    with pytest.warns(RuntimeWarning, match="tour sorter: LKH died"):
+        order, heads = plan_tour(pts, Pose(-100.0, -100.0, 0.3),
+                                 (0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 23.4, 50.0)
     assert sorted(order) == list(range(len(pts))) and len(heads) == len(pts)
     cells = [((c + 0.5) * 50, (r + 0.5) * 50) for r in range(5) for c in range(12)]
-    r = ideal_path(cells, (25.0, -75.0))
+    with pytest.warns(RuntimeWarning, match="ideal: LKH died"):
+        r = ideal_path(cells, (25.0, -75.0))
     assert r.method is IdealMethod.BOUND and r.distance == pytest.approx(r.lower)
+
+
+def test_a_tour_from_far_away_stays_within_lkh_integers():
+    """A tour planned from 14,000 km away (ArduPlane's position before its EKF origin, as on
+    SITL) gave matrix entries of 2.8e9, which overflowed LKH's 32-bit costs into an abort;
+    the entries are now scaled below ``lkh.MAX_ENTRY`` and LKH succeeds."""
+    import warnings
+
+    pts = np.array([((c + 0.5) * 50, (r + 0.5) * 50) for r in range(3) for c in range(4)])[:10]
+    assert lkh.integer_matrix(np.array([[0.0, 2.8e8]]), 10.0).max() == lkh.MAX_ENTRY
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)      # LKH's fallback would warn
+        order, _ = plan_tour(pts, Pose(-1.1e7, -8.0e6, 1.0),
+                             (0.0, math.pi / 2, math.pi, 3 * math.pi / 2), 23.4, 50.0)
+    assert sorted(order) == list(range(10))

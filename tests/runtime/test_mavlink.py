@@ -106,6 +106,25 @@ def test_a_shorter_l1_period_gives_tighter_planned_turns():
         peer.stop()
 
 
+def test_positions_before_home_are_not_poses(link):
+    """ArduPlane's GLOBAL_POSITION_INT before its EKF has an origin (SITL: ~9 s near lat/lon
+    0, 0) is no pose: a tour planned from there (14,000 km away) overflowed LKH."""
+    from types import SimpleNamespace
+
+    grid, sim, peer, v = link
+    v.prepare(Start.GROUND)
+    before = v.pose()
+    msg = SimpleNamespace(time_boot_ms=int(v.time * 1000) + 100, lat=990, lon=-344, alt=584000,
+                          relative_alt=0, vx=0, vy=0)
+    home = v.home_amsl
+    v.home_amsl = None                           # as right after boot
+    v._on_position(msg)
+    assert (v.pose().x, v.pose().y) == (before.x, before.y)
+    v.home_amsl = home
+    v._on_position(msg)                          # once home is known, positions count
+    assert math.hypot(v.pose().x, v.pose().y) > 1e6
+
+
 def test_old_parameter_names_are_converted():
     grid = load_map(data=MAP)
     params = {"TRIM_ARSPD_CM": 1700.0, "LIM_ROLL_CD": 4000.0, "WP_LOITER_RAD": 60.0}
