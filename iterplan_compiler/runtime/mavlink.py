@@ -283,6 +283,8 @@ class MavlinkVehicle(MavlinkMonitor, Vehicle):
             missing.append(f"a 3-D GPS fix (fix type {self.fix_type})")
         if self.home_amsl is None:
             missing.append("the home position")
+        elif not self.has_position:       # positions count from home on (mavlink_monitor)
+            missing.append("a position")
         if not self.prearm_ok and not (start is not Start.GROUND and self.flying):
             missing.append("the pre-arm checks")
         return missing

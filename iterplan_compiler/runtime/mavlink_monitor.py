@@ -41,6 +41,7 @@ class MavlinkMonitor(MavlinkLink):
         MavlinkLink.__init__(self, conn, config, progress)
         self.frame = frame
         self._pose = VehiclePose(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self.has_position = False         # a real position (after home) has been seen
         self._last_pos_wall = time.monotonic()
         self._monitoring = False          # faults are reported once the mission starts
         self._reported: set[str] = set()
@@ -141,6 +142,7 @@ class MavlinkMonitor(MavlinkLink):
             # SITL sends lat/lon within metres of (0, 0), 14,000 km from its field.  Home is
             # set only once the position is real; until then the pose stays where it was.
             return
+        self.has_position = True
         x, y = self.frame.to_enu(msg.lat / 1e7, msg.lon / 1e7)
         vn, ve = msg.vx / 100.0, msg.vy / 100.0
         alt = msg.relative_alt / 1000.0
