@@ -125,6 +125,18 @@ def test_positions_before_home_are_not_poses(link):
     assert math.hypot(v.pose().x, v.pose().y) > 1e6
 
 
+def test_an_airborne_start_waits_for_a_position_after_home(link):
+    """Taking over a flying aircraft right after connecting: home may come before the first
+    position that counts; 'flying' must be judged from a real position, not the initial one."""
+    from iterplan_compiler.runtime.vehicle import VehiclePose
+
+    grid, sim, peer, v = airborne(link)
+    v.has_position = False                       # as on a fresh link: home known, no pose yet
+    v._pose = VehiclePose(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert v.prepare(Start.AUTO) is Start.AIRBORNE
+    assert v.has_position and v.pose().alt > 10.0
+
+
 def test_old_parameter_names_are_converted():
     grid = load_map(data=MAP)
     params = {"TRIM_ARSPD_CM": 1700.0, "LIM_ROLL_CD": 4000.0, "WP_LOITER_RAD": 60.0}
