@@ -59,15 +59,6 @@ def write_maps(work: Path, count: int, seeds: range) -> dict[int, Path]:
     return maps
 
 
-def home_arg(path: Path) -> str:
-    from iterplan_compiler.runtime.grid import math_to_compass
-    from iterplan_compiler.runtime.mapfile import load_map
-
-    grid = load_map(path)
-    lat, lon = grid.to_latlon(*grid.home)
-    return f"{lat:.7f},{lon:.7f},{svs.HOME_AMSL:g},{math_to_compass(grid.arrival_heading) % 360:g}"
-
-
 def fly(work: Path, sitl: Path, ac: str, m: Path, sorter: str, where: str,
         instances: queue.Queue[int], speedup: float) -> dict:
     out = work / where / f"{m.stem}-{sorter}"
@@ -83,7 +74,8 @@ def fly(work: Path, sitl: Path, ac: str, m: Path, sorter: str, where: str,
         port = 5760 + 10 * i
         wd = work / "sitl-work" / out.name
         wd.mkdir(parents=True, exist_ok=True)
-        pid = svs.start_sitl(sitl, i, wd, speedup, svs.param_files(work, sitl, ac), home_arg(m))
+        pid = svs.start_sitl(sitl, i, wd, speedup, svs.param_files(work, sitl, ac),
+                              svs.map_launch(m)[1])
         try:
             proc = svs.iterc(*args, "--vehicle", "mavlink", "--connect",
                              f"tcp:127.0.0.1:{port}", timeout=3600)
@@ -125,8 +117,9 @@ def main(argv: list[str] | None = None) -> int:
         instances.put(i)
     jobs = [(s, so, w) for w in ("sitl", "sim") for s in maps for so in sorters]
     with cf.ThreadPoolExecutor(max(1, args.jobs)) as pool:
-        res = dict(zip(jobs, pool.map(lambda j: fly(work, sitl, args.aircraft, maps[j[0]], j[1],
-                                                     j[2], instances, args.speedup), jobs)))
+        flown = pool.map(lambda j: fly(work, sitl, args.aircraft, maps[j[0]], j[1], j[2],
+                                       instances, args.speedup), jobs)
+        res = dict(zip(jobs, flown, strict=True))
     return report(res, maps, sorters, args, time.monotonic() - t0)
 
 

@@ -93,11 +93,16 @@ def launch_point(name: str, k: int = 0) -> tuple[str, str]:
     ``LAUNCH_OFFSETS[k]``, at the map's arrival heading, where the simulator takes off too.
     (SITL's default home is CMAC, the maps' SW corner, heading 353: a different first leg, and
     with it a different visiting order, would be compared.)"""
+    return map_launch(ROOT / "examples" / f"{name}.json", *LAUNCH_OFFSETS[k])
+
+
+def map_launch(path: Path, dx: float = 0.0, dy: float = 0.0) -> tuple[str, str]:
+    """:func:`launch_point` of the map file ``path``, ``dx``/``dy`` metres east/north of its
+    home."""
     from iterplan_compiler.runtime.grid import math_to_compass
     from iterplan_compiler.runtime.mapfile import load_map
 
-    grid = load_map(ROOT / "examples" / f"{name}.json")
-    dx, dy = LAUNCH_OFFSETS[k]
+    grid = load_map(path)
     lat, lon = grid.to_latlon(grid.home[0] + dx, grid.home[1] + dy)
     heading = math_to_compass(grid.arrival_heading) % 360
     return f"{lat:.7f},{lon:.7f}", f"{lat:.7f},{lon:.7f},{HOME_AMSL:g},{heading:g}"

@@ -79,7 +79,7 @@ def test_product_bracket_survives_errors() -> None:
     assert state is not None
     a, b = bdd.var("a"), bdd.var("b")
     assert bddmod.and_exists(bdd, a, b, {"b"}, state) == a
-    with pytest.raises(Exception):
+    with pytest.raises(ValueError):                  # dd: unknown variable
         bddmod.or_forall(bdd, a, b, {"no_such_variable"}, state)
     assert (state.depth, state.epoch) == (0, 2)
 

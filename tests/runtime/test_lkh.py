@@ -6,6 +6,7 @@ failed assertion did on SITL.  Without the isolation these tests would kill pyte
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import time
@@ -34,7 +35,7 @@ def test_a_solve_returns_the_in_process_tour():
     tour = lkh.solve_matrix(m, asymmetric=False)
     assert tour[0] == tour[-1] and sorted(tour[:-1]) == list(range(12))
     # the points on a circle: the optimum goes round it
-    steps = {(b - a) % 12 for a, b in zip(tour, tour[1:])}
+    steps = {(b - a) % 12 for a, b in itertools.pairwise(tour)}
     assert steps <= {1, 11}
     assert tour == elkai.DistanceMatrix(m.tolist()).solve_tsp(runs=1)
 

@@ -7,10 +7,9 @@ from __future__ import annotations
 
 from unittest.mock import patch
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from test_agreement import problems
-
-import pytest
 
 from iterplan_compiler.ir.lts import TAU
 from iterplan_compiler.synthesis import partition, symbolic_game
