@@ -104,7 +104,9 @@ def format_report(name: str, result: SynthesisResult) -> str:
                         if st.trans_bdd_nodes is not None else ""))
     if st.get("turns") == "on":
         lines.append(f"  turn steps: solved on {st.get('turn_starts')} turn starts "
-                     f"({st.get('turn_start_nodes')} BDD nodes), one whole turn per move")
+                     f"({st.get('turn_start_nodes')} BDD nodes), one whole turn per move"
+                     + ("; variable order learned from them"
+                        if st.get("order_learned_at") is not None else ""))
     if st.get("macro") == "on":
         lines.append(f"  macro steps: {st.get('macro_chain_states')} controller-only chain "
                      f"states compressed, {st.get('macro_v_states')} others, exit relation "

@@ -25,7 +25,7 @@ from iterplan_compiler.synthesis.recode import recode_leaves
 from iterplan_compiler.synthesis.strategy import StrategyKind, extract_director
 from iterplan_compiler.synthesis.symbolic_game import SymbolicGame, quotient_leaves
 from iterplan_compiler.synthesis.symbolic_strategy import extract_gr1_strategy
-from iterplan_compiler.synthesis.turns import TurnSolution, solve_turns
+from iterplan_compiler.synthesis.turns import Reorder, TurnSolution, solve_turns
 
 __all__ = ["SymbolicGame", "VariableOrder", "nonblocking_symbolic", "solve_symbolic", "subgame"]
 
@@ -158,13 +158,13 @@ def solve_symbolic(spec: GameSpec, stats: dict[str, Any], say: Callable[[str], N
             said = True
     nonblocking = spec.mode is GameMode.NONBLOCKING
     g = _encode(spec, order, stats, t)
-    goals = [gj | g.failures for gj in (g.guarantees or [g.live])]
     turned = None
     if not nonblocking and macro is MacroSteps.AUTO:
-        turned = _turns_first(g, goals, stats, say, started, said)
+        g, turned = _turns_first(g, order, stats, say, started, said)
         said = said or turned is not None
         if turned is not None and verdict_only and (turned.realizable or not explain):
             return turned.realizable, None, "" if turned.realizable else _uncounted()
+    goals = _goals(g)
     reach = _reach(g, stats, say, nonblocking, turned.reachable() if turned else None)
     care = g.live if reach is None else reach
     t = time.perf_counter()
@@ -225,18 +225,33 @@ def _uncounted() -> str:
     return losing_head(None, None)
 
 
-def _turns_first(g: SymbolicGame, goals: list[Any], stats: dict[str, Any],
+def _goals(g: SymbolicGame) -> list[Any]:
+    """The fixpoint's goals: each guarantee (or every live state) with the failures."""
+    return [gj | g.failures for gj in (g.guarantees or [g.live])]
+
+
+def _turns_first(g: SymbolicGame, order: VariableOrder, stats: dict[str, Any],
                  say: Callable[[str], None], started: float, said: bool
-                 ) -> TurnSolution | None:
+                 ) -> tuple[SymbolicGame, TurnSolution | None]:
     """The turn game (:mod:`turns`) where it applies, its verdict said at once — before the
-    full game's reachable set, which the controller extraction still needs."""
+    full game's reachable set, which the controller extraction still needs.  In the default
+    order the variable order may be learned on the way (:mod:`learn_order`): the game is then
+    built again in the learned order and solved from the start; the game solved is returned."""
     t = time.perf_counter()
-    turned = solve_turns(g, g.assumptions, goals, say=say, stats=stats)
+    turned = solve_turns(g, g.assumptions, _goals(g), say=say, stats=stats,
+                         learn=order is VariableOrder.CLUSTERED)
+    if isinstance(turned, Reorder):
+        say(f"turn steps: variable order learned from the turn starts ({turned.nodes} "
+            f"nodes); building the game again in it")
+        stats["order_learned_at"] = turned.nodes
+        g = _encode(g.spec, order, stats, time.perf_counter(), names=turned.names)
+        turned = solve_turns(g, g.assumptions, _goals(g), say=say, stats=stats)
+    assert not isinstance(turned, Reorder)  # learning was not asked for
     if turned is not None:
         stats["t_turns"] = time.perf_counter() - t
         if not said:
             _announce(turned.realizable, started, stats, say)
-    return turned
+    return g, turned
 
 
 def _winning(g: SymbolicGame, care: Any, goals: list[Any], turned: TurnSolution | None,
@@ -268,9 +283,10 @@ def _fixpoint(g: SymbolicGame, care: Any, goals: list[Any], stats: dict[str, Any
 
 
 def _encode(spec: GameSpec, order: VariableOrder, stats: dict[str, Any],
-            t: float) -> SymbolicGame:
-    """The symbolic game of ``spec`` (leaves encoded one by one)."""
-    g = SymbolicGame(spec, order=order)
+            t: float, names: tuple[str, ...] | None = None) -> SymbolicGame:
+    """The symbolic game of ``spec`` (leaves encoded one by one; ``names``: a learned
+    variable order, :mod:`learn_order`)."""
+    g = SymbolicGame(spec, order=order, names=names)
     stats["bdd_backend"] = type(g.bdd).__module__
     stats["order"] = order
     stats["t_encode"] = time.perf_counter() - t

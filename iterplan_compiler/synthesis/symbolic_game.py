@@ -27,12 +27,10 @@ Game (§3.3): ``Env(s) = ∨_{g unc} ∃s'. R_g``;
 ``CPre(X) = (Env ∧ ¬∨_{g unc} ∃s'. R_g ∧ ¬X') ∨ (¬Env ∧ ∨_{g ctrl} ∃s'. R_g ∧ X')``
 restricted to ``live``; dead ends satisfy neither disjunct, so they lose.
 
-Variable orders (``order``, a :class:`options.VariableOrder`): ``CLUSTERED`` (default: each
-body component's bits with current/next interleaved, each fluent monitor's bit right after the
-smallest component sharing most actions with it), ``ACTION_FIRST`` (the same without moving
-fluents: they come last — the name is historical, there are no action bits any more),
-``ACTION_LAST`` (= action_first) and ``BLOCKED`` (all current bits, then all next bits; the
-textbook bad order).
+Variable orders (``order``, :class:`options.VariableOrder`; docs/synthesis.md): ``CLUSTERED``
+(default: components' bits in composition order, current/next interleaved, each fluent
+monitor's bit after the machine sharing most actions with it), ``ACTION_FIRST`` = ``LAST``
+(fluents last), ``BLOCKED`` (all current bits, then all next bits); or ``names`` (learned).
 """
 
 from __future__ import annotations
@@ -47,7 +45,6 @@ from iterplan_compiler.symbolic.bdd import (
     and_exists,
     bits_for,
     cofactor,
-    declare_interleaved,
     disjoin,
     new_manager,
     value_cubes,
@@ -109,10 +106,12 @@ class SymbolicGame:
     """Partitioned BDD encoding of a :class:`GameSpec` (see the module docstring)."""
 
     def __init__(self, spec: GameSpec, *, bdd: Any = None,
-                 order: VariableOrder = VariableOrder.CLUSTERED) -> None:
+                 order: VariableOrder = VariableOrder.CLUSTERED,
+                 names: tuple[str, ...] | None = None) -> None:  # names: learn_order.py
         if not isinstance(order, VariableOrder):
             raise TypeError(f"order must be a VariableOrder, not {order!r}")
         self.spec = spec
+        self._names = names
         self.bdd = bdd if bdd is not None else new_manager()
         comps = spec.components
         self.err_code = [c.num_states if c.has_error else None for c in comps]
@@ -139,21 +138,28 @@ class SymbolicGame:
         self.cur: list[BitVec] = []
         self.nxt: list[BitVec] = []
         if order is VariableOrder.BLOCKED:
-            cur_names = [tuple(f"s{k}_{i}" for i in range(w)) for k, w in enumerate(widths)]
-            nxt_names = [tuple(f"s{k}_{i}'" for i in range(w)) for k, w in enumerate(widths)]
-            for names in (*cur_names, *nxt_names):
-                b.declare(*names)
-            self.cur = [BitVec(n) for n in cur_names]
-            self.nxt = [BitVec(n) for n in nxt_names]
+            self.cur = [BitVec(tuple(f"s{k}_{i}" for i in range(w))) for k, w in enumerate(widths)]
+            self.nxt = [BitVec(tuple(n + "'" for n in vec.names)) for vec in self.cur]
+            for vec in (*self.cur, *self.nxt):
+                b.declare(*vec.names)
             return
         if self.spec.bit_keys and order is VariableOrder.CLUSTERED:
             self._declare_by_keys(widths)
             return
-        vecs: dict[int, tuple[BitVec, BitVec]] = {}
-        for k in self._declaration_order(order):
-            vecs[k] = declare_interleaved(b, f"s{k}", widths[k])
-        self.cur = [vecs[k][0] for k in range(len(widths))]
-        self.nxt = [vecs[k][1] for k in range(len(widths))]
+        ks = self._declaration_order(order)
+        cur = {k: tuple(f"s{k}_{i}" for i in range(widths[k])) for k in ks}
+        self._declare_pairs([n for k in ks for n in cur[k]])
+        self.cur = [BitVec(cur[k]) for k in range(len(widths))]
+        self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
+
+    def _declare_pairs(self, names: list[str]) -> None:
+        """Each current-state variable and its primed copy, interleaved, in the order
+        ``names`` or in the one given to the constructor (a permutation of it)."""
+        given = self._names
+        if given is not None and sorted(given) != sorted(names):
+            raise ValueError("the variable order given is not one of this game's variables")
+        for n in names if given is None else given:
+            self.bdd.declare(n, n + "'")
 
     def _declare_by_keys(self, widths: list[int]) -> None:
         """Variables of recoded machines (:mod:`recode`): a feature bit is the *shared*
@@ -162,10 +168,10 @@ class SymbolicGame:
         unreachable states are dropped); residual and error bits are the machine's own.
         Declared component by component (``clustered`` order), each shared variable where
         it is first used; current/next interleaved."""
-        b = self.bdd
         keys = self.spec.bit_keys
         shared: dict[str, str] = {}
         cur: dict[int, list[str]] = {k: [] for k in range(len(widths))}
+        order: list[str] = []
         for k in self._declaration_order(VariableOrder.CLUSTERED):
             for i, key in enumerate(keys[k]):
                 if key is None or key == ERROR_BIT:
@@ -175,8 +181,9 @@ class SymbolicGame:
                     continue
                 else:
                     name = shared[key] = f"f{len(shared)}"
-                b.declare(name, name + "'")
+                order.append(name)
                 cur[k].append(name)
+        self._declare_pairs(order)
         self.cur = [BitVec(tuple(cur[k])) for k in range(len(widths))]
         self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
 

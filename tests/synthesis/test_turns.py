@@ -338,3 +338,84 @@ def test_syntech15_declaration_order_keeps_verdict_and_controller(tmp_path):
         assert runs[0].realizable == (not rel.startswith("unrealizable"))
         if runs[0].realizable:
             assert all(bisimilar(runs[0].controller, r.controller) for r in runs[1:])
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(turn_problems(budget=3))
+def test_learned_order_keeps_verdict_and_controller(prob):
+    """The variable order learned from the turn starts (synthesis/learn_order.py; with
+    ``LEARN_NODES = 0`` after the first turn) gives the declared order's verdict and a
+    bisimilar controller; without learning nothing is learned."""
+    from iterplan_compiler.synthesis import turns
+
+    runs = {}
+    for at in (None, 0):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(turns, "LEARN_NODES", at)
+            runs[at] = synthesize(prob, explain=False)
+    plain, learned = runs[None], runs[0]
+    assert "order_learned_at" not in plain.stats
+    assert plain.realizable == learned.realizable
+    if plain.realizable:
+        assert bisimilar(plain.controller, learned.controller)
+
+
+def test_learned_order_is_the_rebuilt_games_order(monkeypatch, capsys):
+    """On the small SYNTECH15-shaped spec, learning from the first turn rebuilds the game
+    with its variables in the sifted order (each current variable right before its primed
+    copy), says so, and solves it to the same controller."""
+    from iterplan_compiler.cli import main
+    from iterplan_compiler.pipeline import load_model
+    from iterplan_compiler.synthesis import game, turns
+    from iterplan_compiler.synthesis.learn_order import sifted_order
+
+    prob, _ = load_model(str(DATA / "macro_turns.fsp"))[0].synthesis_problem("Control")
+    plain = synthesize(prob, explain=False)
+    built: list[SymbolicGame] = []
+    encode = game._encode
+    monkeypatch.setattr(game, "_encode", lambda *a, **k: built.append(encode(*a, **k))
+                        or built[-1])
+    sifted: list[tuple[str, ...] | None] = []
+    monkeypatch.setattr(turns, "sifted_order",
+                        lambda *a: sifted.append(sifted_order(*a)) or sifted[-1])
+    monkeypatch.setattr(turns, "LEARN_NODES", 0)
+    learned = synthesize(prob, explain=False)
+    assert learned.stats["order_learned_at"] > 0 and len(built) == 2 and len(sifted) == 1
+    first, second = built
+    names = tuple(n for n in sorted(second.bdd.vars, key=second.bdd.level_of_var)
+                  if n in second.cur_vars)
+    assert names == sifted[0] and sorted(names) == sorted(first.cur_vars)
+    for n in names:
+        assert second.bdd.level_of_var(n + "'") == second.bdd.level_of_var(n) + 1
+    assert bisimilar(plain.controller, learned.controller)
+    assert main(["synth", str(DATA / "macro_turns.fsp"), "Control"]) == 0
+    assert "variable order learned from them" in capsys.readouterr().out
+
+
+def test_declared_order_can_be_given():
+    """``SymbolicGame(names=...)`` declares exactly that order; a list that is not a
+    permutation of the game's own variables is refused."""
+    prob, _ = _syntech_free_problem()
+    spec = prepare(prob)
+    g = SymbolicGame(spec)
+    names = tuple(reversed(sorted(g.cur_vars, key=g.bdd.level_of_var)))
+    h = SymbolicGame(spec, names=names)
+    assert tuple(sorted(h.cur_vars, key=h.bdd.level_of_var)) == names
+    with pytest.raises(ValueError):
+        SymbolicGame(spec, names=names[1:])
+
+
+def test_sifted_order_needs_cudd():
+    import dd.autoref
+
+    from iterplan_compiler.synthesis.learn_order import sifted_order
+
+    b = dd.autoref.BDD()
+    b.declare("x", "x'")
+    assert sifted_order(b, b.var("x"), {"x"}) is None
+
+
+def _syntech_free_problem():
+    from iterplan_compiler.pipeline import load_model
+
+    return load_model(str(DATA / "macro_turns.fsp"))[0].synthesis_problem("Control")
