@@ -111,11 +111,10 @@ class SymbolicGame:
         if not isinstance(order, VariableOrder):
             raise TypeError(f"order must be a VariableOrder, not {order!r}")
         self.spec = spec
-        self._names = names
         self.bdd = bdd if bdd is not None else new_manager()
         comps = spec.components
         self.err_code = [c.num_states if c.has_error else None for c in comps]
-        self._declare(order)
+        self._declare(order, names)
         self.cur_vars = {v for vec in self.cur for v in vec.names}
         self.nxt_vars = {v for vec in self.nxt for v in vec.names}
         self.prime = {c: n for cv, nv in zip(self.cur, self.nxt, strict=True)
@@ -131,7 +130,7 @@ class SymbolicGame:
 
     # -- variables ----------------------------------------------------------------------
 
-    def _declare(self, order: VariableOrder) -> None:
+    def _declare(self, order: VariableOrder, given: tuple[str, ...] | None) -> None:
         b = self.bdd
         comps = self.spec.components
         widths = [bits_for(c.num_states + (1 if c.has_error else 0)) for c in comps]
@@ -144,24 +143,23 @@ class SymbolicGame:
                 b.declare(*vec.names)
             return
         if self.spec.bit_keys and order is VariableOrder.CLUSTERED:
-            self._declare_by_keys(widths)
+            self._declare_by_keys(widths, given)
             return
         ks = self._declaration_order(order)
         cur = {k: tuple(f"s{k}_{i}" for i in range(widths[k])) for k in ks}
-        self._declare_pairs([n for k in ks for n in cur[k]])
+        self._declare_pairs([n for k in ks for n in cur[k]], given)
         self.cur = [BitVec(cur[k]) for k in range(len(widths))]
         self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
 
-    def _declare_pairs(self, names: list[str]) -> None:
+    def _declare_pairs(self, names: list[str], given: tuple[str, ...] | None) -> None:
         """Each current-state variable and its primed copy, interleaved, in the order
-        ``names`` or in the one given to the constructor (a permutation of it)."""
-        given = self._names
+        ``names`` or in the ``given`` one (a permutation of it: the constructor's ``names``)."""
         if given is not None and sorted(given) != sorted(names):
             raise ValueError("the variable order given is not one of this game's variables")
         for n in names if given is None else given:
             self.bdd.declare(n, n + "'")
 
-    def _declare_by_keys(self, widths: list[int]) -> None:
+    def _declare_by_keys(self, widths: list[int], given: tuple[str, ...] | None) -> None:
         """Variables of recoded machines (:mod:`recode`): a feature bit is the *shared*
         variable of its fluent (every machine tracking the same fluent, same initial value,
         reads the same variable — their copies agree on every reachable state, so only
@@ -183,7 +181,7 @@ class SymbolicGame:
                     name = shared[key] = f"f{len(shared)}"
                 order.append(name)
                 cur[k].append(name)
-        self._declare_pairs(order)
+        self._declare_pairs(order, given)
         self.cur = [BitVec(tuple(cur[k])) for k in range(len(widths))]
         self.nxt = [BitVec(tuple(n + "'" for n in cur[k])) for k in range(len(widths))]
 
